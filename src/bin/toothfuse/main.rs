@@ -1,0 +1,2 @@
+//! `toothfuse` command-line tool.
+fn main() {}

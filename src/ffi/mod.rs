@@ -1,0 +1,1 @@
+//! The C ABI: the only unsafe code in the crate.

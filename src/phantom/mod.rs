@@ -1,0 +1,1 @@
+//! The synthetic jaw: realistic IOS and CBCT meshes with known ground truth.
