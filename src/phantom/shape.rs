@@ -75,6 +75,7 @@ pub struct ToothShape {
     occl_bl: f64,
     table: f64,
     edge_round: f64,
+    occlusal_min: f64,
     incisal: bool,
     cusps: Vec<Cusp>,
     grooves: Vec<Groove>,
@@ -333,6 +334,9 @@ impl ToothShape {
             occl_bl,
             table,
             edge_round,
+            occlusal_min: table
+                - grooves.iter().map(|g| g.depth).sum::<f64>()
+                - if incisal { 0.8 * 1.7 } else { 0.0 },
             incisal,
             cusps,
             grooves,
@@ -380,19 +384,24 @@ impl ToothShape {
         let a = self.md / 2.0;
         if self.incisal {
             // Incisal edge slightly lower at the corners.
-            t -= 0.8 * (x / a).powi(2);
+            t -= 0.8 * (x / a).powi(2).min(1.7);
         }
         for c in &self.cusps {
             let d2 = (x - c.x).powi(2) + (y - c.y).powi(2);
-            t += c.height * (-d2 / (2.0 * c.radius * c.radius)).exp();
+            let e = d2 / (2.0 * c.radius * c.radius);
+            if e < 14.0 {
+                t += c.height * (-e).exp();
+            }
         }
         for g in &self.grooves {
             let (dx, dy) = (g.b.0 - g.a.0, g.b.1 - g.a.1);
             let len2 = dx * dx + dy * dy;
             let s = (((x - g.a.0) * dx + (y - g.a.1) * dy) / len2).clamp(0.0, 1.0);
             let (px, py) = (g.a.0 + s * dx - x, g.a.1 + s * dy - y);
-            let d2 = px * px + py * py;
-            t -= g.depth * (-d2 / (2.0 * g.width * g.width)).exp();
+            let e = (px * px + py * py) / (2.0 * g.width * g.width);
+            if e < 14.0 {
+                t -= g.depth * (-e).exp();
+            }
         }
         t
     }
@@ -407,11 +416,28 @@ impl ToothShape {
         let n = self.exponent;
         let u = (p.x / a).abs();
         let v = (p.y / b).abs();
-        let norm = (u.powf(n) + v.powf(n)).powf(1.0 / n);
+        // Superellipse norm with one pow: max·(1 + (min/max)^n)^(1/n).
+        let (hi, lo) = if u >= v { (u, v) } else { (v, u) };
+        let norm = if hi > 0.0 {
+            hi * (1.0 + (lo / hi).powf(n)).powf(1.0 / n)
+        } else {
+            0.0
+        };
         let side = (norm - 1.0) * a.min(b);
-        let top = z - self.occlusal(p.x, p.y);
+        // Below the lowest possible occlusal surface by more than the edge rounding, the
+        // occlusal term cannot change the smooth maximum: skip it.
+        let top = if z - self.occlusal_min < side - self.edge_round {
+            f64::NEG_INFINITY
+        } else {
+            z - self.occlusal(p.x, p.y)
+        };
         let bottom = -z - 1.5;
-        smax(smax(side, top, self.edge_round), bottom, 0.5)
+        let crown = if top == f64::NEG_INFINITY {
+            side
+        } else {
+            smax(side, top, self.edge_round)
+        };
+        smax(crown, bottom, 0.5)
     }
 
     /// Signed distance-like value of the whole tooth at local point `p` (negative inside).
@@ -429,7 +455,7 @@ fn root_sdf(r: &Root, p: DVec3) -> f64 {
     let len2 = axis.length_squared();
     let t = ((p - r.top).dot(axis) / len2).clamp(0.0, 1.0);
     let c = r.top + axis * t;
-    let rad = r.r_top + (r.r_apex - r.r_top) * t.powf(1.4);
+    let rad = r.r_top + (r.r_apex - r.r_top) * t * t.sqrt();
     let mut d = p - c;
     d.y /= r.aspect;
     d.length() * (1.0f64).min(r.aspect) - rad
