@@ -99,6 +99,26 @@ pub struct PlacedTooth {
 }
 
 impl PlacedTooth {
+    /// A tooth at a given pose with its margin parameters (local base height, interproximal
+    /// rise, (wave amplitude, wave phase)).
+    pub fn new(
+        shape: ToothShape,
+        rot: DMat3,
+        center: DVec3,
+        s: f64,
+        margin: (f64, f64, (f64, f64)),
+    ) -> PlacedTooth {
+        PlacedTooth {
+            shape,
+            rot,
+            center,
+            s,
+            margin_base: margin.0,
+            margin_rise: margin.1,
+            margin_wave: margin.2,
+        }
+    }
+
     /// World → local.
     #[inline]
     pub fn to_local(&self, p: DVec3) -> DVec3 {

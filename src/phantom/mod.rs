@@ -16,6 +16,7 @@ mod grid;
 mod ios;
 mod layout;
 mod project;
+mod real;
 pub mod rng;
 mod shape;
 mod surface_nets;

@@ -77,6 +77,7 @@ pub struct ToothShape {
     edge_round: f64,
     occlusal_min: f64,
     incisal: bool,
+    sampled: Option<Box<super::real::SampledSdf>>,
     cusps: Vec<Cusp>,
     grooves: Vec<Groove>,
     roots: Vec<Root>,
@@ -338,14 +339,50 @@ impl ToothShape {
                 - grooves.iter().map(|g| g.depth).sum::<f64>()
                 - if incisal { 0.8 * 1.7 } else { 0.0 },
             incisal,
+            sampled: None,
             cusps,
             grooves,
             roots,
         }
     }
 
+    /// A real tooth given by a sampled signed distance in its local frame, with its measures.
+    pub fn from_sampled(
+        fdi: u8,
+        sdf: super::real::SampledSdf,
+        md: f64,
+        bl: f64,
+        crown_height: f64,
+        root_length: f64,
+        z_widest: f64,
+    ) -> ToothShape {
+        ToothShape {
+            fdi,
+            md,
+            bl,
+            crown_height,
+            root_length,
+            z_widest,
+            exponent: 2.0,
+            cervical: 1.0,
+            occl_md: 1.0,
+            occl_bl: 1.0,
+            table: crown_height,
+            edge_round: 0.5,
+            occlusal_min: crown_height,
+            incisal: false,
+            sampled: Some(Box::new(sdf)),
+            cusps: Vec::new(),
+            grooves: Vec::new(),
+            roots: Vec::new(),
+        }
+    }
+
     /// Local bounding box (lo, hi) enclosing the surface with a margin.
     pub fn local_box(&self) -> (DVec3, DVec3) {
+        if let Some(s) = &self.sampled {
+            return s.bounds();
+        }
         let (a, b) = (self.md / 2.0, self.bl / 2.0);
         let mut lo = DVec3::new(-a - 0.5, -b - 0.5, -self.root_length - 1.0);
         let mut hi = DVec3::new(a + 0.5, b + 0.5, self.crown_height + 0.8);
@@ -442,6 +479,9 @@ impl ToothShape {
 
     /// Signed distance-like value of the whole tooth at local point `p` (negative inside).
     pub fn eval(&self, p: DVec3) -> f64 {
+        if let Some(s) = &self.sampled {
+            return s.eval(p);
+        }
         let mut d = self.crown(p);
         for r in &self.roots {
             d = smin(d, root_sdf(r, p), 1.2);
