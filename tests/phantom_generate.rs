@@ -152,7 +152,7 @@ fn cbct_deviates_from_truth_like_real_segmentations() {
                 (0.05..=0.4).contains(&rms),
                 "seed {seed} tooth {fdi}: RMS {rms}"
             );
-            assert!(max < 0.8, "seed {seed} tooth {fdi}: max {max}");
+            assert!(max < 0.95, "seed {seed} tooth {fdi}: max {max}");
             all.extend(d);
         }
         let (rms, _, _) = stats(&all);
@@ -291,4 +291,41 @@ fn generation_is_deterministic() {
     }
     let c = Phantom::generate(&PhantomOptions { seed: 8, ..opts }).unwrap();
     assert_ne!(bits(&a.ios.mesh), bits(&c.ios.mesh));
+}
+
+#[test]
+fn optional_holes_stay_inside_single_component_crowns() {
+    let mut opts = PhantomOptions {
+        seed: 9,
+        jaw: Jaw::Lower,
+        variant: Variant::PartialArch,
+        ..Default::default()
+    };
+    opts.realism.ios.holes = 4;
+    let p = Phantom::generate(&opts).unwrap();
+    let crowns = p.ios_crowns();
+    let mut loops = 0;
+    for (fdi, c) in &crowns {
+        let r = c.topology_report();
+        assert_eq!(r.components, 1, "crown {fdi}");
+        assert_eq!(
+            r.non_manifold_edges + r.non_manifold_vertices,
+            0,
+            "crown {fdi}"
+        );
+        loops += r.boundary_loops;
+    }
+    assert!(
+        loops > crowns.len(),
+        "some crowns carry holes: {loops} loops for {} crowns",
+        crowns.len()
+    );
+    let plain = phantom(9, Jaw::Lower, Variant::PartialArch);
+    for (fdi, c) in plain.ios_crowns() {
+        assert_eq!(
+            c.topology_report().boundary_loops,
+            1,
+            "crown {fdi} without holes"
+        );
+    }
 }

@@ -37,8 +37,8 @@ impl Default for CbctRealism {
             voxel: 0.3,
             blur_sigma: 0.4,
             noise: 0.25,
-            threshold_bias: 0.2,
-            distortion: 0.2,
+            threshold_bias: 0.25,
+            distortion: 0.25,
             contact_flattening: true,
             mesh_spacing: 0.3,
         }

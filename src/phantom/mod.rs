@@ -32,8 +32,8 @@
 //!   ([`Variant::HeavyDrift`]: 4×).
 //! - **CBCT** (`cbct`): per tooth a 0.3 mm voxel grid in the CBCT frame, partial-volume
 //!   occupancy, correlated noise, Gaussian blur σ = 0.4 mm, segmentation with a per-tooth
-//!   threshold bias (inflate/shrink up to 0.2 mm), split from touching neighbours along a plane
-//!   (both flattened), surface nets, smooth low-frequency distortion (~0.2 mm);
+//!   threshold bias (inflate/shrink 0.1–0.25 mm), split from touching neighbours along a plane
+//!   (both flattened), surface nets, smooth low-frequency distortion (~0.25 mm amplitude);
 //!   [`Variant::MetalArtefact`]: one posterior crown bloated by 0.5–0.9 mm with 5–7 streak
 //!   spikes of 1.2–2.2 mm.
 //! - **Real anatomy** (`real`): with [`PhantomOptions::anatomy`], real closed tooth meshes are
@@ -46,8 +46,8 @@
 //!   surface: median 0.0075 mm, 90 % quantile ≤ 0.019 mm (the rest is label bleed onto gingiva).
 //!   The IOS crown boundary lies 0.5–0.6 mm (mean) from the true margin polyline, up to
 //!   3.7 mm where a notch reaches up to the contact.
-//! - CBCT: 3.8k–10.1k vertices per tooth; deviation from the true surface over a jaw
-//!   RMS 0.16–0.20 mm, mean 0.14–0.17 mm, max 0.59–0.69 mm; per tooth RMS 0.09–0.31 mm.
+//! - CBCT: 3.7k–10.3k vertices per tooth; deviation from the true surface over a jaw
+//!   RMS 0.20–0.24 mm, mean 0.17–0.20 mm, max 0.64–0.79 mm; per tooth RMS 0.11–0.37 mm.
 //! - Truth surfaces: 5.8k–14.3k vertices per tooth (0.25 mm surface nets).
 //! - Drift at the far end: 0.42–0.52°, 0.15–0.18 mm (crown centroid shift).
 //! - Time: ~3.9 s CPU per full jaw in release, single-threaded (criterion `benches/phantom.rs`
