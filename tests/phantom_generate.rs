@@ -7,6 +7,7 @@ use phantom_support::*;
 use std::collections::BTreeMap;
 use std::sync::{Mutex, OnceLock};
 use toothfuse::arch::{Jaw, arch_order};
+use toothfuse::mesh::boundary_loops;
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 
 type Key = (u64, bool, &'static str);
@@ -131,6 +132,29 @@ fn ios_crowns_lie_on_the_drifted_truth() {
         // surface plus ~0.01 mm noise.
         assert!(q90 < 0.05, "crown {fdi}: 90% quantile {q90}");
         assert!(q99 < 0.5, "crown {fdi}: 99% quantile {q99}");
+        // The crown's boundary follows the true margin (up to label bleed and the notches).
+        let lp = &boundary_loops(&crown)[0];
+        let mut md: Vec<f64> = lp
+            .iter()
+            .map(|&v| {
+                let q = back.apply(crown.positions[v as usize]);
+                t.margin
+                    .iter()
+                    .map(|m| (*m - q).length())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        md.sort_by(|a, b| a.total_cmp(b));
+        let median = md[md.len() / 2];
+        assert!(median < 0.5, "crown {fdi}: margin median distance {median}");
+        // The margin is closed, ordered and lies on the true surface.
+        for w in t.margin.windows(2) {
+            assert!((w[1] - w[0]).length() < 1.5, "crown {fdi}: margin step");
+        }
+        assert!(
+            t.margin.iter().all(|m| sd.distance(*m) < 0.05),
+            "crown {fdi}: margin on surface"
+        );
     }
 }
 

@@ -197,10 +197,21 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             point: 0.5 * (drift[ios_idx[a]].apply(c) + drift[ios_idx[b]].apply(c)),
         })
         .collect();
+    // True margins (world): where the simulated gingiva meets each IOS tooth; nominal for the
+    // others.
+    let mut margins: BTreeMap<u8, Vec<DVec3>> = BTreeMap::new();
     let ios = if ios_teeth.is_empty() {
         LabeledMesh::default()
     } else {
-        let (mut mesh, labels) = ios::simulate(&ios_teeth, &contacts, occ, &realism.ios, &mut irng);
+        let (mut mesh, labels, ms) =
+            ios::simulate(&ios_teeth, &contacts, occ, &realism.ios, &mut irng);
+        for (k, m) in ms.into_iter().enumerate() {
+            let back = drift[ios_idx[k]].inverse();
+            margins.insert(
+                teeth[ios_idx[k]].shape.fdi,
+                m.into_iter().map(|p| back.apply(p)).collect(),
+            );
+        }
         mesh.transform(&world_to_ios);
         LabeledMesh {
             mesh,
@@ -282,8 +293,9 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             ToothTruth {
                 fdi,
                 surface,
-                margin: t
-                    .margin(120)
+                margin: margins
+                    .remove(&fdi)
+                    .unwrap_or_else(|| t.margin(120))
                     .into_iter()
                     .map(|p| uncanon.apply(p))
                     .collect(),

@@ -44,15 +44,16 @@
 //! - IOS: 191k–201k vertices (380k–399k faces), crowns 4.6k–11.2k vertices each, mean crown
 //!   edge 0.165 mm; crown vertices mapped back by `(world_to_ios ∘ ios_drift)⁻¹` lie on the true
 //!   surface: median 0.0075 mm, 90 % quantile ≤ 0.019 mm (the rest is label bleed onto gingiva).
-//!   The IOS crown boundary lies 0.5–0.6 mm (mean) from the true margin polyline, up to
-//!   3.7 mm where a notch reaches up to the contact.
+//!   The true margin ([`ToothTruth::margin`]) is where the simulated gingiva meets the tooth;
+//!   the IOS crown boundary lies 0.36–0.41 mm (mean) from it (label bleed, polyline spacing),
+//!   up to 3.5 mm where a notch reaches up to the contact.
 //! - CBCT: 3.7k–10.3k vertices per tooth; deviation from the true surface over a jaw
 //!   RMS 0.20–0.24 mm, mean 0.17–0.20 mm, max 0.64–0.79 mm; per tooth RMS 0.11–0.37 mm.
 //! - Truth surfaces: 5.8k–14.3k vertices per tooth (0.25 mm surface nets).
 //! - Drift at the far end: 0.42–0.52°, 0.15–0.18 mm (crown centroid shift).
 //! - Time: ~3.9 s CPU per full jaw in release, single-threaded (criterion `benches/phantom.rs`
 //!   measured 9.7 s upper / 7.8 s lower wall time while the 2-core machine ran at load ~7).
-//! - Real anatomy (Open-Full-Jaw p26 mandible, 14 teeth): CBCT RMS 0.17 mm, max 0.62 mm;
+//! - Real anatomy (Open-Full-Jaw p26 mandible, 14 teeth): CBCT RMS 0.21 mm, max 0.70 mm;
 //!   IOS 180k vertices.
 
 mod cbct;
