@@ -30,10 +30,22 @@ fn samples(d: &Path) -> Vec<(String, Vec<u8>)> {
     }
     let encs = [
         VtpEncoding::Ascii,
-        VtpEncoding::Binary { compressed: true, header64: false },
-        VtpEncoding::AppendedRaw { compressed: true, header64: true },
-        VtpEncoding::AppendedRaw { compressed: false, header64: false },
-        VtpEncoding::AppendedBase64 { compressed: true, header64: false },
+        VtpEncoding::Binary {
+            compressed: true,
+            header64: false,
+        },
+        VtpEncoding::AppendedRaw {
+            compressed: true,
+            header64: true,
+        },
+        VtpEncoding::AppendedRaw {
+            compressed: false,
+            header64: false,
+        },
+        VtpEncoding::AppendedBase64 {
+            compressed: true,
+            header64: false,
+        },
     ];
     for (i, enc) in encs.into_iter().enumerate() {
         let mut b = Vec::new();
@@ -67,7 +79,10 @@ fn truncated_files_never_panic_and_mid_cuts_fail() {
             let p = put(&d, &name, &bytes[..cut]);
             if let Err(e) = read_mesh(&p) {
                 assert_eq!(e.kind(), ErrorKind::Io, "{name} cut at {cut}: {e}");
-                assert!(e.to_string().contains(&name), "{name}: message names the file: {e}");
+                assert!(
+                    e.to_string().contains(&name),
+                    "{name}: message names the file: {e}"
+                );
             }
         }
         // Cutting the file in half always loses data, detectably in every format with counts
@@ -116,18 +131,30 @@ fn indices_out_of_range_are_named() {
     let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
         property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 7\n";
-    expect_io(&put(&d, "o.ply", ply.as_bytes()), &["face 1 refers to vertex 7", "3 vertices"]);
+    expect_io(
+        &put(&d, "o.ply", ply.as_bytes()),
+        &["face 1 refers to vertex 7", "3 vertices"],
+    );
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n";
-    expect_io(&put(&d, "o.obj", obj.as_bytes()), &["face 1 refers to vertex 8", "line 5"]);
+    expect_io(
+        &put(&d, "o.obj", obj.as_bytes()),
+        &["face 1 refers to vertex 8", "line 5"],
+    );
     let obj = "v 0 0 0\nf -1 -2 -3\n";
     expect_io(&put(&d, "n.obj", obj.as_bytes()), &["refers to vertex -1"]);
     let vtk = LEGACY.replace("3 0 2 3", "3 0 2 4");
-    expect_io(&put(&d, "o.vtk", vtk.as_bytes()), &["face 1 refers to vertex 4"]);
+    expect_io(
+        &put(&d, "o.vtk", vtk.as_bytes()),
+        &["face 1 refers to vertex 4"],
+    );
     let vtp = r#"<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="3" NumberOfPolys="1">
 <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
 <Polys><DataArray type="Int32" Name="connectivity" format="ascii">0 1 3</DataArray>
 <DataArray type="Int32" Name="offsets" format="ascii">3</DataArray></Polys></Piece></PolyData></VTKFile>"#;
-    expect_io(&put(&d, "o.vtp", vtp.as_bytes()), &["face 0 refers to vertex 3"]);
+    expect_io(
+        &put(&d, "o.vtp", vtp.as_bytes()),
+        &["face 0 refers to vertex 3"],
+    );
 }
 
 #[test]
@@ -142,37 +169,81 @@ fn wrong_counts_are_reported() {
     let vtp = r#"<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="0">
 <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
 </Piece></PolyData></VTKFile>"#;
-    expect_io(&put(&d, "c.vtp", vtp.as_bytes()), &["9 ascii values, expected 12"]);
+    expect_io(
+        &put(&d, "c.vtp", vtp.as_bytes()),
+        &["9 ascii values, expected 12"],
+    );
     // VTP: offsets run past the connectivity.
     let vtp = r#"<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="3" NumberOfPolys="1">
 <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
 <Polys><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2</DataArray>
 <DataArray type="Int32" Name="offsets" format="ascii">4</DataArray></Polys></Piece></PolyData></VTKFile>"#;
-    expect_io(&put(&d, "c2.vtp", vtp.as_bytes()), &["connectivity", "expected 4"]);
+    expect_io(
+        &put(&d, "c2.vtp", vtp.as_bytes()),
+        &["connectivity", "expected 4"],
+    );
     // Legacy: size field disagrees with the cells.
     let vtk = LEGACY.replace("POLYGONS 2 8", "POLYGONS 2 9");
     expect_io(&put(&d, "c.vtk", vtk.as_bytes()), &["line"]);
     let vtk = LEGACY.replace("POLYGONS 2 8", "POLYGONS 3 8");
-    expect_io(&put(&d, "c2.vtk", vtk.as_bytes()), &["POLYGONS: cell 2 claims"]);
+    expect_io(
+        &put(&d, "c2.vtk", vtk.as_bytes()),
+        &["POLYGONS: cell 2 claims"],
+    );
     // Legacy: label count differs from the cells.
-    let vtk = LEGACY.replace("CELL_DATA 2", "CELL_DATA 1").replace("11 12\n", "11\n");
-    expect_io(&put(&d, "c3.vtk", vtk.as_bytes()), &["CELL_DATA has 1 values for 2 cells"]);
+    let vtk = LEGACY
+        .replace("CELL_DATA 2", "CELL_DATA 1")
+        .replace("11 12\n", "11\n");
+    expect_io(
+        &put(&d, "c3.vtk", vtk.as_bytes()),
+        &["CELL_DATA has 1 values for 2 cells"],
+    );
     // Binary STL whose triangle count disagrees with the size.
     let mut stl = vec![0u8; 84 + 50];
     stl[80] = 2;
-    expect_io(&put(&d, "c.stl", &stl), &["header says 2 triangles", "134 bytes"]);
+    expect_io(
+        &put(&d, "c.stl", &stl),
+        &["header says 2 triangles", "134 bytes"],
+    );
     // Non-integer labels, non-finite coordinates, unsupported VTK types.
-    let ply2 = ply.replace("element vertex 4", "element vertex 3")
-        .replace("property float z\n", "property float z\nproperty float label\n")
+    let ply2 = ply
+        .replace("element vertex 4", "element vertex 3")
+        .replace(
+            "property float z\n",
+            "property float z\nproperty float label\n",
+        )
         .replace("0 0 0\n1 0 0\n0 1 0\n", "0 0 0 11\n1 0 0 11.5\n0 1 0 11\n");
-    expect_io(&put(&d, "l.ply", ply2.as_bytes()), &["vertex 1 has label 11.5"]);
-    expect_io(&put(&d, "nan.obj", b"v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), &["vertex 0", "non-finite"]);
+    expect_io(
+        &put(&d, "l.ply", ply2.as_bytes()),
+        &["vertex 1 has label 11.5"],
+    );
+    expect_io(
+        &put(&d, "nan.obj", b"v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        &["vertex 0", "non-finite"],
+    );
     let ug = r#"<VTKFile type="UnstructuredGrid"><UnstructuredGrid/></VTKFile>"#;
-    expect_io(&put(&d, "u.vtp", ug.as_bytes()), &["UnstructuredGrid", "PolyData"]);
+    expect_io(
+        &put(&d, "u.vtp", ug.as_bytes()),
+        &["UnstructuredGrid", "PolyData"],
+    );
     let sp = LEGACY.replace("DATASET POLYDATA", "DATASET STRUCTURED_POINTS");
     expect_io(&put(&d, "s.vtk", sp.as_bytes()), &["STRUCTURED_POINTS"]);
-    expect_io(&put(&d, "f.obj", b"v 0 0 0\nv 1 x 0\n"), &["line 2", "\"x\" is not a number"]);
-    expect_io(&put(&d, "z.obj", b"v 0 0 0\nf 0 1 1\n"), &["line 2", "index 0"]);
-    expect_io(&put(&d, "two.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n"), &["face 0 has 2 vertices"]);
-    assert!(read_mesh(d.join("missing.ply")).unwrap_err().to_string().contains("cannot read"));
+    expect_io(
+        &put(&d, "f.obj", b"v 0 0 0\nv 1 x 0\n"),
+        &["line 2", "\"x\" is not a number"],
+    );
+    expect_io(
+        &put(&d, "z.obj", b"v 0 0 0\nf 0 1 1\n"),
+        &["line 2", "index 0"],
+    );
+    expect_io(
+        &put(&d, "two.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n"),
+        &["face 0 has 2 vertices"],
+    );
+    assert!(
+        read_mesh(d.join("missing.ply"))
+            .unwrap_err()
+            .to_string()
+            .contains("cannot read")
+    );
 }

@@ -26,9 +26,9 @@ fn folder_round_trip_in_each_format() {
         .map(|(f, m)| {
             // keep f32-exact after the shift
             let mut m = m;
-            m.positions
-                .iter_mut()
-                .for_each(|p| *p = DVec3::new(p.x as f32 as f64, p.y as f32 as f64, p.z as f32 as f64));
+            m.positions.iter_mut().for_each(|p| {
+                *p = DVec3::new(p.x as f32 as f64, p.y as f32 as f64, p.z as f32 as f64)
+            });
             (f, m)
         })
         .collect();
@@ -41,7 +41,11 @@ fn folder_round_trip_in_each_format() {
         put(&d, "tooth_x.stl", b"not a tooth");
         put(&d, "tooth_11.bak", b"backup");
         let back = read_teeth(&d).unwrap();
-        assert_eq!(back.keys().collect::<Vec<_>>(), vec![&11, &21, &36], "{ext}");
+        assert_eq!(
+            back.keys().collect::<Vec<_>>(),
+            vec![&11, &21, &36],
+            "{ext}"
+        );
         for (f, m) in &teeth {
             if ext == "stl" {
                 // Welded in first-use order: same corners per triangle.
@@ -64,7 +68,10 @@ fn folder_errors() {
     let m = grid(3, 1);
     write_mesh(d.join("tooth_19.stl"), &m, &[]).unwrap();
     let e = read_teeth(&d).unwrap_err().to_string();
-    assert!(e.contains("tooth_19.stl") && e.contains("label 19 is not an FDI"), "{e}");
+    assert!(
+        e.contains("tooth_19.stl") && e.contains("label 19 is not an FDI"),
+        "{e}"
+    );
     std::fs::remove_file(d.join("tooth_19.stl")).unwrap();
     write_mesh(d.join("tooth_11.stl"), &m, &[]).unwrap();
     write_mesh(d.join("tooth_11.ply"), &m, &[]).unwrap();
@@ -73,7 +80,10 @@ fn folder_errors() {
     std::fs::remove_file(d.join("tooth_11.ply")).unwrap();
     put(&d, "tooth_12.stl", b"garbage");
     let e = read_teeth(&d).unwrap_err().to_string();
-    assert!(e.starts_with("tooth 12: ") && e.contains("tooth_12.stl"), "{e}");
+    assert!(
+        e.starts_with("tooth 12: ") && e.contains("tooth_12.stl"),
+        "{e}"
+    );
 }
 
 /// A jaw of three "teeth" (grid patches) plus gingiva, labeled per vertex.
@@ -108,7 +118,13 @@ fn split_labeled_jaw_by_vertex_and_face_labels() {
     let fl: Vec<i32> = jaw
         .triangles
         .iter()
-        .map(|t| if vl[t[0] as usize] == 22 { 0 } else { vl[t[0] as usize] })
+        .map(|t| {
+            if vl[t[0] as usize] == 22 {
+                0
+            } else {
+                vl[t[0] as usize]
+            }
+        })
         .collect();
     let mut b = Vec::new();
     toothfuse::io::write_vtp(
@@ -131,12 +147,19 @@ fn split_labeled_jaw_by_vertex_and_face_labels() {
     assert_eq!(teeth.keys().copied().collect::<Vec<_>>(), vec![11, 21, 31]);
     let (jaw, vl) = labeled_jaw([0, 8, 9, 33]);
     write_mesh(&p, &jaw, &[("label", &vl)]).unwrap();
-    let e = read_teeth_with(&p, LabelScheme::Universal).unwrap_err().to_string();
+    let e = read_teeth_with(&p, LabelScheme::Universal)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("label 33 is outside 1-32"), "{e}");
 
     // No labels at all, or only gingiva.
     write_mesh(&p, &jaw, &[]).unwrap();
-    assert!(read_teeth(&p).unwrap_err().to_string().contains("no per-vertex or per-face labels"));
+    assert!(
+        read_teeth(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("no per-vertex or per-face labels")
+    );
     write_mesh(&p, &jaw, &[("label", &vec![0; jaw.vertex_count()])]).unwrap();
     assert_eq!(read_teeth(&p).unwrap_err().kind(), ErrorKind::MissingData);
 }
@@ -145,13 +168,35 @@ fn split_labeled_jaw_by_vertex_and_face_labels() {
 fn universal_numbering_matches_the_open_full_jaw_table() {
     // README of the real data: mandible 17→38 … 24→31, 25→41 … 32→48; maxilla n→1(9−n), 9..16→2(n−8).
     let mandible = [
-        (17, 38), (18, 37), (19, 36), (20, 35), (21, 34), (22, 33), (23, 32), (24, 31),
-        (25, 41), (26, 42), (27, 43), (28, 44), (29, 45), (30, 46), (31, 47), (32, 48),
+        (17, 38),
+        (18, 37),
+        (19, 36),
+        (20, 35),
+        (21, 34),
+        (22, 33),
+        (23, 32),
+        (24, 31),
+        (25, 41),
+        (26, 42),
+        (27, 43),
+        (28, 44),
+        (29, 45),
+        (30, 46),
+        (31, 47),
+        (32, 48),
     ];
     for (n, f) in mandible {
         assert_eq!(universal_to_fdi(n), Some(f), "{n}");
     }
-    for (n, f) in [(1, 18), (3, 16), (4, 15), (6, 13), (8, 11), (9, 21), (16, 28)] {
+    for (n, f) in [
+        (1, 18),
+        (3, 16),
+        (4, 15),
+        (6, 13),
+        (8, 11),
+        (9, 21),
+        (16, 28),
+    ] {
         assert_eq!(universal_to_fdi(n), Some(f), "{n}");
     }
     for n in [0, 33, -1] {

@@ -18,9 +18,18 @@ fn vtp_round_trip_every_encoding_bitwise() {
     let mut encs = vec![VtpEncoding::Ascii];
     for compressed in [false, true] {
         for header64 in [false, true] {
-            encs.push(VtpEncoding::Binary { compressed, header64 });
-            encs.push(VtpEncoding::AppendedRaw { compressed, header64 });
-            encs.push(VtpEncoding::AppendedBase64 { compressed, header64 });
+            encs.push(VtpEncoding::Binary {
+                compressed,
+                header64,
+            });
+            encs.push(VtpEncoding::AppendedRaw {
+                compressed,
+                header64,
+            });
+            encs.push(VtpEncoding::AppendedBase64 {
+                compressed,
+                header64,
+            });
         }
     }
     for enc in encs {
@@ -30,7 +39,11 @@ fn vtp_round_trip_every_encoding_bitwise() {
         let back = read_mesh(&p).unwrap();
         assert_eq!(back.mesh.triangles, m.triangles, "{enc:?}");
         for (a, b) in back.mesh.positions.iter().zip(&m.positions) {
-            assert_eq!(a.to_array().map(f64::to_bits), b.to_array().map(f64::to_bits), "{enc:?}");
+            assert_eq!(
+                a.to_array().map(f64::to_bits),
+                b.to_array().map(f64::to_bits),
+                "{enc:?}"
+            );
         }
         assert_eq!(back.vertex_labels.as_deref(), Some(&pl[..]), "{enc:?}");
         assert_eq!(back.face_labels.as_deref(), Some(&cl[..]), "{enc:?}");
@@ -225,26 +238,39 @@ LOOKUP_TABLE default
 #[test]
 fn legacy_binary_both_layouts() {
     let d = scratch("vtk_bin");
-    let pts = [0.1f64, 0.2, 0.3, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, -5.5];
+    let pts = [
+        0.1f64, 0.2, 0.3, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, -5.5,
+    ];
     for modern in [false, true] {
-        let mut b = b"# vtk DataFile Version 3.0\nbin\nBINARY\nDATASET POLYDATA\nPOINTS 4 double\n".to_vec();
+        let mut b = b"# vtk DataFile Version 3.0\nbin\nBINARY\nDATASET POLYDATA\nPOINTS 4 double\n"
+            .to_vec();
         pts.iter().for_each(|v| b.extend(v.to_be_bytes()));
         if modern {
             b.extend(b"\nPOLYGONS 3 6\nOFFSETS vtktypeint64\n");
             [0i64, 3, 6].iter().for_each(|v| b.extend(v.to_be_bytes()));
             b.extend(b"\nCONNECTIVITY vtktypeint64\n");
-            [0i64, 1, 2, 0, 2, 3].iter().for_each(|v| b.extend(v.to_be_bytes()));
+            [0i64, 1, 2, 0, 2, 3]
+                .iter()
+                .for_each(|v| b.extend(v.to_be_bytes()));
         } else {
             b.extend(b"\nPOLYGONS 2 8\n");
-            [3i32, 0, 1, 2, 3, 0, 2, 3].iter().for_each(|v| b.extend(v.to_be_bytes()));
+            [3i32, 0, 1, 2, 3, 0, 2, 3]
+                .iter()
+                .for_each(|v| b.extend(v.to_be_bytes()));
         }
         b.extend(b"\nPOINT_DATA 4\nSCALARS label short\nLOOKUP_TABLE default\n");
-        [11i16, 12, 13, 14].iter().for_each(|v| b.extend(v.to_be_bytes()));
+        [11i16, 12, 13, 14]
+            .iter()
+            .for_each(|v| b.extend(v.to_be_bytes()));
         b.extend(b"\nCELL_DATA 2\nSCALARS labels unsigned_char 1\n");
         b.extend([41u8, 42]);
         b.push(b'\n');
         let lm = read_mesh(put(&d, "b.vtk", &b)).unwrap();
-        assert_eq!(lm.mesh.positions[0], DVec3::new(0.1, 0.2, 0.3), "modern={modern}");
+        assert_eq!(
+            lm.mesh.positions[0],
+            DVec3::new(0.1, 0.2, 0.3),
+            "modern={modern}"
+        );
         assert_eq!(lm.mesh.positions[3].z, -5.5);
         assert_eq!(lm.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(lm.vertex_labels, Some(vec![11, 12, 13, 14]));

@@ -21,8 +21,18 @@ fn tooth_box(size: DVec3) -> TriMesh {
         c(0., 1., 1.),
     ];
     let tris = vec![
-        [0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
-        [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7],
+        [0, 2, 1],
+        [0, 3, 2],
+        [4, 5, 6],
+        [4, 6, 7],
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
     ];
     let rot = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
     TriMesh::new(pos, tris).transformed(&Rigid {
@@ -32,12 +42,15 @@ fn tooth_box(size: DVec3) -> TriMesh {
 }
 
 fn scaled(m: &TriMesh, s: f64) -> TriMesh {
-    TriMesh::new(m.positions.iter().map(|p| *p * s).collect(), m.triangles.clone())
+    TriMesh::new(
+        m.positions.iter().map(|p| *p * s).collect(),
+        m.triangles.clone(),
+    )
 }
 
 #[test]
 fn tooth_scale_accepts_mm_and_names_the_wrong_unit() {
-    assert!(TOOTH_DIAGONAL_MIN_MM < 5.0 && TOOTH_DIAGONAL_MAX_MM >= 40.0);
+    const { assert!(TOOTH_DIAGONAL_MIN_MM < 5.0 && TOOTH_DIAGONAL_MAX_MM >= 40.0) };
     let molar = tooth_box(DVec3::new(10.0, 11.0, 20.0)); // rotated: box diagonal ~36 mm
     let incisor_crown = tooth_box(DVec3::new(7.0, 6.0, 9.0));
     let primary_crown = tooth_box(DVec3::new(3.0, 2.5, 4.0));
@@ -47,16 +60,30 @@ fn tooth_scale_accepts_mm_and_names_the_wrong_unit() {
     let e = check_tooth_scale(&scaled(&molar, 0.001), 36, "CBCT").unwrap_err();
     assert_eq!(e.kind(), ErrorKind::UnitMismatch);
     let s = e.to_string();
-    assert!(s.contains("tooth 36") && s.contains("CBCT") && s.contains("metres"), "{s}");
+    assert!(
+        s.contains("tooth 36") && s.contains("CBCT") && s.contains("metres"),
+        "{s}"
+    );
     let diag = toothfuse::units::bbox_diagonal(&scaled(&molar, 0.001)).unwrap();
-    assert!(s.contains(&format!("{diag:.4}")) && s.contains("convert to millimetres"), "{s}");
-    let s = check_tooth_scale(&scaled(&incisor_crown, 0.1), 11, "IOS").unwrap_err().to_string();
+    assert!(
+        s.contains(&format!("{diag:.4}")) && s.contains("convert to millimetres"),
+        "{s}"
+    );
+    let s = check_tooth_scale(&scaled(&incisor_crown, 0.1), 11, "IOS")
+        .unwrap_err()
+        .to_string();
     assert!(s.contains("centimetres") && s.contains("IOS"), "{s}");
-    let s = check_tooth_scale(&scaled(&molar, 1000.0), 36, "IOS").unwrap_err().to_string();
+    let s = check_tooth_scale(&scaled(&molar, 1000.0), 36, "IOS")
+        .unwrap_err()
+        .to_string();
     assert!(s.contains("micrometres"), "{s}");
-    let s = check_tooth_scale(&scaled(&molar, 1e-7), 36, "IOS").unwrap_err().to_string();
+    let s = check_tooth_scale(&scaled(&molar, 1e-7), 36, "IOS")
+        .unwrap_err()
+        .to_string();
     assert!(s.contains("far too small"), "{s}");
-    let s = check_tooth_scale(&scaled(&molar, 20.0), 36, "IOS").unwrap_err().to_string();
+    let s = check_tooth_scale(&scaled(&molar, 20.0), 36, "IOS")
+        .unwrap_err()
+        .to_string();
     assert!(s.contains("far too large"), "{s}");
     let e = check_tooth_scale(&TriMesh::default(), 36, "IOS").unwrap_err();
     assert_eq!(e.kind(), ErrorKind::InvalidArgument);
@@ -105,7 +132,9 @@ fn consistent_scales_compare_medians() {
 #[test]
 fn real_crowns_and_cbct_teeth_have_consistent_widths() {
     let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)");
+        eprintln!(
+            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
+        );
         return;
     };
     let ios = toothfuse::io::read_teeth_with(
