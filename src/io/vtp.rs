@@ -17,6 +17,9 @@ use quick_xml::events::{BytesStart, Event};
 
 pub use super::vtp_write::{VtpEncoding, write_vtp};
 
+/// Largest point or cell count accepted from a header (keeps size arithmetic far from overflow).
+const MAX_COUNT: usize = 1 << 40;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Section {
     None,
@@ -127,9 +130,12 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         let n = |k: &str| -> Result<usize> {
                             match attr(e, k)? {
                                 None => Ok(0),
-                                Some(v) => v.trim().parse().map_err(|_| {
-                                    err(format!("Piece attribute {k}={v:?} is not a count"))
-                                }),
+                                Some(v) => match v.trim().parse::<usize>() {
+                                    Ok(c) if c <= MAX_COUNT => Ok(c),
+                                    _ => Err(err(format!(
+                                        "Piece attribute {k}={v:?} is not a plausible count"
+                                    ))),
+                                },
                             }
                         };
                         pieces.push(Piece {

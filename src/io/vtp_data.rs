@@ -73,7 +73,10 @@ pub(super) fn block(
             "compressed header says {nb} blocks of {bs} bytes (last {last}) = {total} bytes, expected {want}"
         ));
     }
-    let nb = nb as usize; // bounded: total == want, so nb <= want + 1
+    if nb > 0 && bs == 0 {
+        return Err(format!("compressed header has {nb} blocks of size 0"));
+    }
+    let nb = nb as usize; // bounded: total == want and bs > 0, so nb <= want / bs + 1
     let mut pos = (3 + nb) * hs;
     let mut out = Vec::with_capacity(want);
     for i in 0..nb {
