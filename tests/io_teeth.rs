@@ -214,3 +214,17 @@ fn universal_numbering_matches_the_open_full_jaw_table() {
     assert_eq!(LabelScheme::MeshLabeler.to_fdi(2).unwrap(), 17);
     assert_eq!(LabelScheme::Fdi.to_fdi(47).unwrap(), 47);
 }
+
+/// A Teeth3DS-style OBJ + JSON (FDI per vertex) splits into its teeth.
+#[test]
+fn teeth3ds_obj_with_json_splits() {
+    let d = scratch("teeth3ds");
+    let (jaw, vl) = labeled_jaw([0, 36, 37, 0]);
+    let p = d.join("ABC_lower.obj");
+    write_mesh(&p, &jaw, &[]).unwrap();
+    let json = serde_json::json!({"jaw": "lower", "labels": vl, "instances": []});
+    put(&d, "ABC_lower.json", json.to_string().as_bytes());
+    let teeth = read_teeth(&p).unwrap();
+    assert_eq!(teeth.keys().copied().collect::<Vec<_>>(), vec![36, 37]);
+    assert_eq!(teeth[&36].face_count(), 18);
+}

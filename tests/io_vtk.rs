@@ -277,3 +277,27 @@ fn legacy_binary_both_layouts() {
         assert_eq!(lm.face_labels, Some(vec![41, 42]));
     }
 }
+
+/// Two pieces are merged: the second piece's indices are shifted by the first's points.
+#[test]
+fn vtp_multiple_pieces_merge() {
+    let d = scratch("vtp_pieces");
+    let piece = |z: f64, l: i32| {
+        format!(
+            r#"<Piece NumberOfPoints="3" NumberOfPolys="1"><CellData><DataArray type="Int32" Name="Label" format="ascii">{l}</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 {z} 1 0 {z} 0 1 {z}</DataArray></Points>
+<Polys><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">3</DataArray></Polys></Piece>"#
+        )
+    };
+    let x = format!(
+        r#"<VTKFile type="PolyData"><PolyData>{}{}</PolyData></VTKFile>"#,
+        piece(0.0, 11),
+        piece(2.5, 12)
+    );
+    let lm = read_mesh(put(&d, "p.vtp", x.as_bytes())).unwrap();
+    assert_eq!(lm.mesh.vertex_count(), 6);
+    assert_eq!(lm.mesh.triangles, vec![[0, 1, 2], [3, 4, 5]]);
+    assert_eq!(lm.mesh.positions[3].z, 2.5);
+    assert_eq!(lm.face_labels, Some(vec![11, 12]));
+}
