@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use toothfuse::io::{LabelScheme, read_mesh, read_teeth_with, write_mesh};
 use toothfuse::mesh::ValidateOptions;
 
-
 fn real(rel: &str) -> Option<PathBuf> {
     let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)");
+        eprintln!(
+            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
+        );
         return None;
     };
     let p = dir.join(rel);
@@ -39,7 +40,11 @@ fn example_01_vtp_counts_and_labels() {
     assert_eq!(labels, want);
     assert_eq!(hist[&0], 43_450);
     for l in 2..=15 {
-        assert!((3000..=5500).contains(&hist[&l]), "label {l}: {} faces", hist[&l]);
+        assert!(
+            (3000..=5500).contains(&hist[&l]),
+            "label {l}: {} faces",
+            hist[&l]
+        );
     }
     // A real open scan: it has a boundary, and (a fact of this file) a few non-manifold edges.
     let rep = lm.mesh.topology_report();
@@ -77,7 +82,12 @@ fn mesh_labeler_label_8_is_fdi_11_by_landmarks() {
         .lines()
         .filter(|l| !l.starts_with('#'))
         .map(|l| {
-            let c: Vec<f64> = l.split(',').skip(1).take(3).map(|x| x.parse().unwrap()).collect();
+            let c: Vec<f64> = l
+                .split(',')
+                .skip(1)
+                .take(3)
+                .map(|x| x.parse().unwrap())
+                .collect();
             [c[0], c[1], c[2]]
         })
         .collect();
@@ -100,7 +110,10 @@ fn mesh_labeler_label_8_is_fdi_11_by_landmarks() {
     let best_frame = [1.0, -1.0]
         .into_iter()
         .map(|s| {
-            let d8: f64 = marks.iter().map(|m| nearest([s * m[0], s * m[1], m[2]], 8)).sum();
+            let d8: f64 = marks
+                .iter()
+                .map(|m| nearest([s * m[0], s * m[1], m[2]], 8))
+                .sum();
             (d8, s)
         })
         .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -111,12 +124,18 @@ fn mesh_labeler_label_8_is_fdi_11_by_landmarks() {
         let d8 = nearest(q, 8);
         assert!(d8 < 1.5, "landmark {m:?} is {d8:.2} mm from label 8");
         for other in [7, 9, 10, 6] {
-            assert!(nearest(q, other) > d8, "label {other} nearer than 8 to {m:?}");
+            assert!(
+                nearest(q, other) > d8,
+                "label {other} nearer than 8 to {m:?}"
+            );
         }
     }
     let teeth = read_teeth_with(&p, LabelScheme::MeshLabeler).unwrap();
     let fdi: Vec<u8> = teeth.keys().copied().collect();
-    assert_eq!(fdi, vec![11, 12, 13, 14, 15, 16, 17, 21, 22, 23, 24, 25, 26, 27]);
+    assert_eq!(
+        fdi,
+        vec![11, 12, 13, 14, 15, 16, 17, 21, 22, 23, 24, 25, 26, 27]
+    );
     // Labels are not FDI: reading with the FDI scheme names the offending label.
     let e = toothfuse::io::read_teeth(&p).unwrap_err().to_string();
     assert!(e.contains("label 2 "), "{e}");

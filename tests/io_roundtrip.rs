@@ -27,7 +27,10 @@ fn ply_round_trip_is_bitwise_in_every_encoding() {
         let back = read_mesh(&p).unwrap();
         assert_eq!(back.mesh.triangles, m.triangles, "{enc:?}");
         for (a, b) in back.mesh.positions.iter().zip(&m.positions) {
-            assert_eq!(a.to_array().map(f64::to_bits), b.to_array().map(f64::to_bits));
+            assert_eq!(
+                a.to_array().map(f64::to_bits),
+                b.to_array().map(f64::to_bits)
+            );
         }
         assert_eq!(back.vertex_labels.as_deref(), Some(&lab[..]), "{enc:?}");
         assert!(back.face_labels.is_none());
@@ -138,7 +141,8 @@ fn obj_round_trip_exact_with_teeth3ds_labels() {
     assert!(back.vertex_labels.is_none());
 
     let lab = labels(m.vertex_count());
-    let json = serde_json::json!({"id_patient": "X", "jaw": "upper", "labels": lab, "instances": []});
+    let json =
+        serde_json::json!({"id_patient": "X", "jaw": "upper", "labels": lab, "instances": []});
     put(&d, "scan_upper.json", json.to_string().as_bytes());
     let back = read_mesh(&p).unwrap();
     assert_eq!(back.vertex_labels.as_deref(), Some(&lab[..]));
@@ -147,7 +151,10 @@ fn obj_round_trip_exact_with_teeth3ds_labels() {
     let bad = serde_json::json!({"jaw": "upper", "labels": &lab[1..]});
     put(&d, "scan_upper.json", bad.to_string().as_bytes());
     let e = read_mesh(&p).unwrap_err().to_string();
-    assert!(e.contains("scan_upper.json") && e.contains("labels for"), "{e}");
+    assert!(
+        e.contains("scan_upper.json") && e.contains("labels for"),
+        "{e}"
+    );
     let bad = serde_json::json!({"jaw": "middle", "labels": lab});
     put(&d, "scan_upper.json", bad.to_string().as_bytes());
     assert!(read_mesh(&p).unwrap_err().to_string().contains("middle"));
@@ -172,10 +179,15 @@ fn write_mesh_refuses_bad_indices_and_unknown_extensions() {
     let m = TriMesh::new(vec![DVec3::ZERO; 3], vec![[0, 1, 3]]);
     for ext in ["ply", "stl", "obj", "vtp"] {
         let e = write_mesh(d.join(format!("x.{ext}")), &m, &[]).unwrap_err();
-        assert!(e.to_string().contains("face 0 refers to vertex 3"), "{ext}: {e}");
+        assert!(
+            e.to_string().contains("face 0 refers to vertex 3"),
+            "{ext}: {e}"
+        );
     }
     let ok = grid(3, 5);
-    let e = write_mesh(d.join("x.xyz"), &ok, &[]).unwrap_err().to_string();
+    let e = write_mesh(d.join("x.xyz"), &ok, &[])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("unknown mesh file extension"), "{e}");
     assert!(write_mesh(d.join("x.vtk"), &ok, &[]).is_err());
 }

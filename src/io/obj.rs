@@ -19,7 +19,8 @@ pub(super) fn read_obj_with_labels(path: &Path, bytes: &[u8]) -> Result<LabeledM
     let mesh = read_obj_bytes(&name, bytes)?;
     let json = path.with_extension("json");
     let vertex_labels = if json.is_file() {
-        let text = std::fs::read(&json).map_err(|e| file_err(&json, format!("cannot read: {e}")))?;
+        let text =
+            std::fs::read(&json).map_err(|e| file_err(&json, format!("cannot read: {e}")))?;
         Some(parse_teeth3ds_labels(
             &json.display().to_string(),
             &text,
@@ -126,9 +127,9 @@ pub(super) fn parse_teeth3ds_labels(file: &str, text: &[u8], vertices: usize) ->
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let x = l.as_f64().ok_or_else(|| {
-                Error::Io(format!("{file}: label {i} is {l}, not a number"))
-            })?;
+            let x = l
+                .as_f64()
+                .ok_or_else(|| Error::Io(format!("{file}: label {i} is {l}, not a number")))?;
             label_from_f64(x, file, "vertex", i)
         })
         .collect()

@@ -5,7 +5,9 @@
 //! `vertex_index` (a list of any integer type, fan-triangulated) and an optional face label.
 //! Write: `x, y, z` as double (lossless) plus `int` vertex properties.
 
-use super::{FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64, label_rank};
+use super::{
+    FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64, label_rank,
+};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
@@ -40,7 +42,9 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
     let verts = ply.payload.get("vertex").map(Vec::as_slice).unwrap_or(&[]);
     check_vertex_count(file, verts.len())?;
     let mut positions = Vec::with_capacity(verts.len());
-    let mut vlabels = vlabel_name.as_ref().map(|_| Vec::with_capacity(verts.len()));
+    let mut vlabels = vlabel_name
+        .as_ref()
+        .map(|_| Vec::with_capacity(verts.len()));
     for (i, v) in verts.iter().enumerate() {
         let c = |k: &str| v.get(k).and_then(scalar_f64);
         let (Some(x), Some(y), Some(z)) = (c("x"), c("y"), c("z")) else {
@@ -48,7 +52,10 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         };
         positions.push(DVec3::new(x, y, z));
         if let (Some(name), Some(out)) = (&vlabel_name, vlabels.as_mut()) {
-            let l = v.get(name.as_str()).and_then(scalar_f64).unwrap_or(f64::NAN);
+            let l = v
+                .get(name.as_str())
+                .and_then(scalar_f64)
+                .unwrap_or(f64::NAN);
             out.push(label_from_f64(l, file, "vertex", i)?);
         }
     }
@@ -74,12 +81,20 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
             }
             fb.polygon(&idx)?;
             if let Some(name) = &flabel_name {
-                let l = e.get(name.as_str()).and_then(scalar_f64).unwrap_or(f64::NAN);
+                let l = e
+                    .get(name.as_str())
+                    .and_then(scalar_f64)
+                    .unwrap_or(f64::NAN);
                 plabels.push(label_from_f64(l, file, "face", f)?);
             }
         }
         if flabel_name.is_some() {
-            face_labels = Some(fb.source_poly.iter().map(|&p| plabels[p as usize]).collect());
+            face_labels = Some(
+                fb.source_poly
+                    .iter()
+                    .map(|&p| plabels[p as usize])
+                    .collect(),
+            );
         }
     }
     Ok(LabeledMesh {
@@ -141,7 +156,9 @@ pub fn write_ply(
         PlyEncoding::BinaryBigEndian => Encoding::BinaryBigEndian,
         PlyEncoding::Ascii => Encoding::Ascii,
     };
-    ply.header.comments.push("written by toothfuse (units: mm)".into());
+    ply.header
+        .comments
+        .push("written by toothfuse (units: mm)".into());
     let mut vdef = ElementDef::new("vertex".into());
     vdef.count = mesh.vertex_count();
     for c in ["x", "y", "z"] {

@@ -74,7 +74,10 @@ pub fn read_teeth(path: impl AsRef<Path>) -> Result<BTreeMap<u8, TriMesh>> {
 /// - a labeled mesh file: split by its face labels (preferred) or vertex labels (a face goes
 ///   to a tooth when its three vertices carry that label); label 0 (gingiva) is dropped,
 ///   other labels are converted by `scheme` (errors name the label).
-pub fn read_teeth_with(path: impl AsRef<Path>, scheme: LabelScheme) -> Result<BTreeMap<u8, TriMesh>> {
+pub fn read_teeth_with(
+    path: impl AsRef<Path>,
+    scheme: LabelScheme,
+) -> Result<BTreeMap<u8, TriMesh>> {
     let path = path.as_ref();
     if path.is_dir() {
         return read_folder(path, scheme);
@@ -160,13 +163,18 @@ fn tooth_number(p: &Path) -> Option<i32> {
 
 /// Writes each tooth to `dir/tooth_<fdi>.<ext>` (creating `dir`); `ext` is `stl`, `ply`,
 /// `obj` or `vtp`.
-pub fn write_teeth_dir(dir: impl AsRef<Path>, teeth: &BTreeMap<u8, TriMesh>, ext: &str) -> Result<()> {
+pub fn write_teeth_dir(
+    dir: impl AsRef<Path>,
+    teeth: &BTreeMap<u8, TriMesh>,
+    ext: &str,
+) -> Result<()> {
     let dir = dir.as_ref();
     std::fs::create_dir_all(dir)
         .map_err(|e| Error::Io(format!("{}: cannot create folder: {e}", dir.display())))?;
     for (&fdi, mesh) in teeth {
         check_fdi(fdi as i32)?;
-        write_mesh(dir.join(format!("tooth_{fdi}.{ext}")), mesh, &[]).map_err(|e| e.in_tooth(fdi))?;
+        write_mesh(dir.join(format!("tooth_{fdi}.{ext}")), mesh, &[])
+            .map_err(|e| e.in_tooth(fdi))?;
     }
     Ok(())
 }

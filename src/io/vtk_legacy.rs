@@ -59,7 +59,9 @@ impl<'a> Lex<'a> {
             .iter()
             .position(|&c| c == b'\n')
             .map_or(self.b.len(), |e| self.pos + e);
-        let text = String::from_utf8_lossy(&self.b[self.pos..end]).trim().to_string();
+        let text = String::from_utf8_lossy(&self.b[self.pos..end])
+            .trim()
+            .to_string();
         self.pos = (end + 1).min(self.b.len());
         Some(text)
     }
@@ -84,19 +86,17 @@ impl<'a> Lex<'a> {
                     self.pos += 1;
                 }
                 if start == self.pos {
-                    return Err(self.err(format!(
-                        "{what}: file ends after {i} of {n} values"
-                    )));
+                    return Err(self.err(format!("{what}: file ends after {i} of {n} values")));
                 }
                 let t = String::from_utf8_lossy(&self.b[start..self.pos]);
-                let x: f64 = t.parse().map_err(|_| {
-                    self.err(format!("{what}: value {i} = {t:?} is not a number"))
-                })?;
+                let x: f64 = t
+                    .parse()
+                    .map_err(|_| self.err(format!("{what}: value {i} = {t:?} is not a number")))?;
                 v.push(x);
             }
             return Ok(v);
         }
-        let len = n.checked_mul(size).unwrap_or(usize::MAX);
+        let len = n.saturating_mul(size);
         let Some(raw) = self.b.get(self.pos..self.pos.saturating_add(len)) else {
             return Err(self.err(format!(
                 "{what}: binary data truncated: {n} values of {size} bytes need {len} bytes, {} left",
@@ -142,7 +142,12 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         return Err(lx.err("not a legacy VTK file (expected `# vtk DataFile Version x.y`)"));
     }
     let _title = lx.raw_line();
-    match lx.raw_line().unwrap_or_default().to_ascii_uppercase().as_str() {
+    match lx
+        .raw_line()
+        .unwrap_or_default()
+        .to_ascii_uppercase()
+        .as_str()
+    {
         "ASCII" => {}
         "BINARY" => lx.binary = true,
         other => return Err(lx.err(format!("third line is {other:?}, expected ASCII or BINARY"))),
@@ -173,7 +178,10 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                 let n = num(&lx, &t, 1, "POINTS")?;
                 let ty = t.get(2).cloned().unwrap_or_default();
                 let v = lx.values(n.saturating_mul(3), &ty, "POINTS")?;
-                points = v.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
+                points = v
+                    .chunks_exact(3)
+                    .map(|c| DVec3::new(c[0], c[1], c[2]))
+                    .collect();
             }
             "VERTICES" | "LINES" | "POLYGONS" | "TRIANGLE_STRIPS" => {
                 let slot = ["VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS"]
@@ -188,8 +196,12 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         let oty = o.get(1).cloned().unwrap_or_default();
                         let offs = lx.values(n, &oty, "OFFSETS")?;
                         let c = lx.line().unwrap_or_default();
-                        if c.first().is_none_or(|k| !k.eq_ignore_ascii_case("CONNECTIVITY")) {
-                            return Err(lx.err(format!("{kw}: expected CONNECTIVITY after OFFSETS")));
+                        if c.first()
+                            .is_none_or(|k| !k.eq_ignore_ascii_case("CONNECTIVITY"))
+                        {
+                            return Err(
+                                lx.err(format!("{kw}: expected CONNECTIVITY after OFFSETS"))
+                            );
                         }
                         let cty = c.get(1).cloned().unwrap_or_default();
                         let conn = lx.values(size, &cty, "CONNECTIVITY")?;
@@ -206,8 +218,16 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
             "POINT_DATA" | "CELL_DATA" => {
                 domain = Some((kw == "POINT_DATA", num(&lx, &t, 1, &kw)?));
             }
-            "SCALARS" | "FIELD" | "VECTORS" | "NORMALS" | "TEXTURE_COORDINATES"
-            | "COLOR_SCALARS" | "TENSORS" | "GLOBAL_IDS" | "PEDIGREE_IDS" | "LOOKUP_TABLE" => {
+            "SCALARS"
+            | "FIELD"
+            | "VECTORS"
+            | "NORMALS"
+            | "TEXTURE_COORDINATES"
+            | "COLOR_SCALARS"
+            | "TENSORS"
+            | "GLOBAL_IDS"
+            | "PEDIGREE_IDS"
+            | "LOOKUP_TABLE" => {
                 let Some((is_point, n)) = domain else {
                     return Err(lx.err(format!("{kw} before POINT_DATA or CELL_DATA")));
                 };
@@ -225,14 +245,17 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                             Some(l) if l[0].eq_ignore_ascii_case("LOOKUP_TABLE") => {}
                             _ => lx.pos = save,
                         }
-                        let v = lx.values(n.saturating_mul(comps), &ty, &format!("SCALARS {name}"))?;
+                        let v =
+                            lx.values(n.saturating_mul(comps), &ty, &format!("SCALARS {name}"))?;
                         found.push((name, comps, v));
                     }
                     "FIELD" => {
                         let k = num(&lx, &t, 2, "FIELD")?;
                         for _ in 0..k {
                             let a = lx.line().unwrap_or_default();
-                            if a.first().is_some_and(|s| s.eq_ignore_ascii_case("NULL_ARRAY")) {
+                            if a.first()
+                                .is_some_and(|s| s.eq_ignore_ascii_case("NULL_ARRAY"))
+                            {
                                 continue;
                             }
                             let comps = num(&lx, &a, 1, "FIELD array")?;
@@ -271,7 +294,9 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                     }
                 }
                 for (name, comps, v) in found {
-                    let Some(rank) = label_rank(&name) else { continue };
+                    let Some(rank) = label_rank(&name) else {
+                        continue;
+                    };
                     if comps != 1 {
                         continue;
                     }
@@ -325,7 +350,12 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                 )));
             }
             let l = to_labels(file, &v, "cell")?;
-            Some(fb.source_poly.iter().map(|&c| l[first_poly_cell + c as usize]).collect())
+            Some(
+                fb.source_poly
+                    .iter()
+                    .map(|&c| l[first_poly_cell + c as usize])
+                    .collect(),
+            )
         }
         None => None,
     };
@@ -344,7 +374,11 @@ fn to_labels(file: &str, v: &[f64], what: &str) -> Result<Vec<i32>> {
 }
 
 fn as_index(x: f64) -> i64 {
-    if x.fract() == 0.0 && x.abs() < 9e15 { x as i64 } else { -1 }
+    if x.fract() == 0.0 && x.abs() < 9e15 {
+        x as i64
+    } else {
+        -1
+    }
 }
 
 /// Classic layout: `n` cells, each `count i0 i1 …`, `data` holding exactly all of them.
@@ -360,7 +394,12 @@ fn split_classic(lx: &Lex, kw: &str, n: usize, data: &[f64]) -> Result<Vec<Vec<i
             )));
         }
         let k = k as usize;
-        cells.push(data[i + 1..i + 1 + k].iter().map(|&x| as_index(x)).collect());
+        cells.push(
+            data[i + 1..i + 1 + k]
+                .iter()
+                .map(|&x| as_index(x))
+                .collect(),
+        );
         i += 1 + k;
     }
     if i != data.len() {
@@ -386,7 +425,12 @@ fn split_offsets(lx: &Lex, kw: &str, offs: &[f64], conn: &[f64]) -> Result<Vec<V
                 conn.len()
             )));
         }
-        cells.push(conn[a as usize..b as usize].iter().map(|&x| as_index(x)).collect());
+        cells.push(
+            conn[a as usize..b as usize]
+                .iter()
+                .map(|&x| as_index(x))
+                .collect(),
+        );
     }
     Ok(cells)
 }

@@ -184,8 +184,9 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         p.arrays.push(d);
                     }
                 }
-                "PointData" | "CellData" | "Points" | "Verts" | "Lines" | "Polys"
-                | "Strips" => section = Section::None,
+                "PointData" | "CellData" | "Points" | "Verts" | "Lines" | "Polys" | "Strips" => {
+                    section = Section::None
+                }
                 _ => {}
             },
             Event::Eof => break,
@@ -237,10 +238,18 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
     let mut positions: Vec<DVec3> = Vec::new();
     let mut triangles = Vec::new();
     let (mut vlabels, mut flabels): (Option<Vec<i32>>, Option<Vec<i32>>) = (None, None);
-    let all_have = |s: Section| pieces.iter().all(|p| pick_label(p, s).is_some() || count_of(p, s) == 0);
-    let use_v = pieces.iter().any(|p| pick_label(p, Section::PointData).is_some())
+    let all_have = |s: Section| {
+        pieces
+            .iter()
+            .all(|p| pick_label(p, s).is_some() || count_of(p, s) == 0)
+    };
+    let use_v = pieces
+        .iter()
+        .any(|p| pick_label(p, Section::PointData).is_some())
         && all_have(Section::PointData);
-    let use_f = pieces.iter().any(|p| pick_label(p, Section::CellData).is_some())
+    let use_f = pieces
+        .iter()
+        .any(|p| pick_label(p, Section::CellData).is_some())
         && all_have(Section::CellData);
     for (pi, p) in pieces.iter().enumerate() {
         let base = positions.len();
@@ -275,11 +284,7 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
         }
         let first_poly_cell = p.verts + p.lines;
         let n_cells = p.verts + p.lines + p.polys + p.strips;
-        triangles.extend(
-            fb.triangles
-                .iter()
-                .map(|t| t.map(|v| v + base as u32)),
-        );
+        triangles.extend(fb.triangles.iter().map(|t| t.map(|v| v + base as u32)));
         if use_v {
             let a = pick_label(p, Section::PointData);
             let vals = match a {
@@ -333,7 +338,13 @@ fn labels_of(ctx: &Ctx, a: &ArrayDesc, n: usize, what: &str) -> Result<Vec<i32>>
 }
 
 /// Connectivity and end offsets of one cell section, checked for consistency.
-fn cells(ctx: &Ctx, p: &Piece, sec: Section, n: usize, pi: usize) -> Result<(Vec<i64>, Vec<usize>)> {
+fn cells(
+    ctx: &Ctx,
+    p: &Piece,
+    sec: Section,
+    n: usize,
+    pi: usize,
+) -> Result<(Vec<i64>, Vec<usize>)> {
     let file = ctx.file;
     if n == 0 {
         return Ok((Vec::new(), Vec::new()));
@@ -360,7 +371,13 @@ fn cells(ctx: &Ctx, p: &Piece, sec: Section, n: usize, pi: usize) -> Result<(Vec
     }
     let conn = decode(ctx, ca, prev)?
         .into_iter()
-        .map(|v| if v.fract() == 0.0 && v.abs() < 9e15 { v as i64 } else { -1 })
+        .map(|v| {
+            if v.fract() == 0.0 && v.abs() < 9e15 {
+                v as i64
+            } else {
+                -1
+            }
+        })
         .collect();
     Ok((conn, ends))
 }
@@ -516,17 +533,21 @@ fn block(ctx: &Ctx, b: &[u8], want: usize) -> std::result::Result<Vec<u8>, Strin
         if n != want as u64 {
             return Err(format!("header says {n} bytes, expected {want}"));
         }
-        return b
-            .get(hs..hs + want)
-            .map(<[u8]>::to_vec)
-            .ok_or_else(|| format!("data truncated: {} of {want} bytes present", b.len().saturating_sub(hs)));
+        return b.get(hs..hs + want).map(<[u8]>::to_vec).ok_or_else(|| {
+            format!(
+                "data truncated: {} of {want} bytes present",
+                b.len().saturating_sub(hs)
+            )
+        });
     }
     let nb = word(0)?;
     let bs = word(1)?;
     let last = word(2)?;
     let total = match nb {
         0 => 0,
-        n => (n - 1).saturating_mul(bs).saturating_add(if last > 0 { last } else { bs }),
+        n => (n - 1)
+            .saturating_mul(bs)
+            .saturating_add(if last > 0 { last } else { bs }),
     };
     if total != want as u64 {
         return Err(format!(
@@ -566,7 +587,7 @@ fn b64(text: &[u8]) -> std::result::Result<Vec<u8>, String> {
         .copied()
         .filter(|c| !c.is_ascii_whitespace())
         .collect();
-    if clean.len() % 4 != 0 {
+    if !clean.len().is_multiple_of(4) {
         return Err(format!(
             "base64 text of {} characters is not a multiple of 4",
             clean.len()

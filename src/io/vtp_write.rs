@@ -134,7 +134,10 @@ pub fn write_vtp(
         );
         match encoding {
             VtpEncoding::Ascii => {
-                xml.push_str(&format!("{head} format=\"ascii\">{}</DataArray>\n", d.ascii()));
+                xml.push_str(&format!(
+                    "{head} format=\"ascii\">{}</DataArray>\n",
+                    d.ascii()
+                ));
             }
             VtpEncoding::Binary { .. } => {
                 let b = encode_b64(&d.bytes(), compressed, header64);
@@ -156,7 +159,9 @@ pub fn write_vtp(
             }
         }
     };
-    let mut doc = String::from("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\"");
+    let mut doc = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\"",
+    );
     doc.push_str(if header64 {
         " header_type=\"UInt64\""
     } else {
