@@ -93,12 +93,12 @@ pub fn write_phantom(ph: &Phantom, dir: &Path) -> Result<()> {
         .vertex_labels
         .clone()
         .context("synthetic IOS has no labels")?;
-    toothfuse::io::write_mesh(&dir.join("ios.ply"), &ph.ios.mesh, &[("label", &labels)])?;
+    toothfuse::io::write_mesh(dir.join("ios.ply"), &ph.ios.mesh, &[("label", &labels)])?;
     let (cbct, cbct_labels) = merge_labeled(&ph.cbct);
-    toothfuse::io::write_mesh(&dir.join("cbct.ply"), &cbct, &[("label", &cbct_labels)])?;
+    toothfuse::io::write_mesh(dir.join("cbct.ply"), &cbct, &[("label", &cbct_labels)])?;
     let mut teeth = Vec::new();
     for (&fdi, t) in &ph.truth.teeth {
-        toothfuse::io::write_mesh(&dir.join(format!("truth/tooth_{fdi}.ply")), &t.surface, &[])?;
+        toothfuse::io::write_mesh(dir.join(format!("truth/tooth_{fdi}.ply")), &t.surface, &[])?;
         teeth.push(json!({
             "fdi": fdi,
             "cbct_to_ios": t.cbct_to_ios.to_row_major(),
