@@ -17,8 +17,12 @@ fn describe(name: &str, m: &TriMesh) -> String {
     let r = m.topology_report();
     let closed = r.boundary_edges == 0 && r.non_manifold_edges == 0;
     let manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;
+    let problem = match m.validate(&Default::default()) {
+        Ok(_) => String::new(),
+        Err(e) => format!(" [first problem: {e}]"),
+    };
     format!(
-        "{name}: {} vertices, {} faces, {} boundary loop(s), {} component(s), closed={}, manifold={}{}",
+        "{name}: {} vertices, {} faces, {} boundary loop(s), {} component(s), closed={}, manifold={}{}{problem}",
         r.vertices,
         r.faces,
         r.boundary_loops,
