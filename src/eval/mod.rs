@@ -28,7 +28,7 @@ pub fn cases(first_seed: u64, n: usize) -> Vec<PhantomOptions> {
                     Jaw::Lower
                 },
                 variant: Variant::ALL[(k % 5) as usize],
-                anatomy: None,
+                ..PhantomOptions::default()
             }
         })
         .collect()

@@ -82,7 +82,7 @@ pub(crate) fn fine_smooth(
         } else {
             o.convergence.max_iterations
         };
-        converged = false;
+        let mut phase_converged = false;
         for _ in 0..cap {
             for (k, f) in order.iter().enumerate() {
                 ios_to_cbct.insert(*f, to_rigid(&x[k]).compose(&inv));
@@ -165,9 +165,13 @@ pub(crate) fn fine_smooth(
                 offs[k] -= step[7 * k + 6];
             }
             if max_move <= o.convergence.step_mm {
-                converged = true;
+                phase_converged = true;
                 break;
             }
+        }
+        // The full-resolution pass after a subsampled one is a fixed refinement.
+        if !full || !o.subsample {
+            converged = phase_converged;
         }
     }
     for (k, f) in order.iter().enumerate() {

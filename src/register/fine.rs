@@ -107,7 +107,11 @@ fn register_group(
             }
             prev_rms = rms;
         }
-        stats.converged = converged;
+        // The full-resolution pass after a subsampled one is a fixed refinement: convergence is
+        // judged on the pass that ran to its threshold.
+        if !full || !o.subsample {
+            stats.converged = converged;
+        }
     }
     (g, stats)
 }
