@@ -184,6 +184,9 @@ pub struct RegisterOptions {
     pub subsample_points: usize,
     /// Distance (mm) under which an IOS point counts as an inlier in the report.
     pub inlier_distance_mm: f64,
+    /// Maximum IOS points per tooth over which SD, RMSE and the inlier fraction are measured
+    /// (deterministic stride sample; `usize::MAX` = every point).
+    pub report_points: usize,
     /// Plausibility checks.
     pub guard: GuardOptions,
 }
@@ -203,6 +206,7 @@ impl RegisterOptions {
             fine: FineMode::Sequential(StageOptions::paper()),
             subsample_points: usize::MAX,
             inlier_distance_mm: 0.5,
+            report_points: usize::MAX,
             guard: GuardOptions {
                 max_fine_correction_mm: f64::INFINITY,
                 reject_implausible: false,
@@ -246,6 +250,9 @@ impl RegisterOptions {
         }
         if self.inlier_distance_mm.is_nan() || self.inlier_distance_mm <= 0.0 {
             return bad("inlier_distance_mm must be > 0");
+        }
+        if self.report_points == 0 {
+            return bad("report_points must be at least 1");
         }
         if self.subsample_points < 3 {
             return bad("subsample_points must be at least 3");
@@ -322,6 +329,7 @@ impl Default for RegisterOptions {
             ),
             subsample_points: 800,
             inlier_distance_mm: 0.5,
+            report_points: 2000,
             guard: GuardOptions {
                 max_fine_correction_mm: 1.5,
                 reject_implausible: true,
