@@ -218,28 +218,3 @@ fn output_frames_and_json() {
     );
     assert!(v["timing_ms"]["total"].as_f64().unwrap() > 0.0);
 }
-
-#[test]
-#[ignore]
-fn debug_paper_stages() {
-    for (dr, inf) in [(0.0, 0.15), (1.0, 0.0), (1.0, 0.15)] {
-        let fx = fixture(dr, inf);
-        let cr = register(&fx.ios, &fx.cbct, &RegisterOptions::paper().without_fine()).unwrap();
-        let p = register(&fx.ios, &fx.cbct, &RegisterOptions::paper()).unwrap();
-        println!(
-            "drift {dr} inflate {inf}: CR {:.4} paper {:.4}",
-            max_tre(&fx, &cr),
-            max_tre(&fx, &p)
-        );
-        for t in p.teeth.values() {
-            println!(
-                "  {} tre {:.3} it {} conv {} sd {:.3}",
-                t.fdi,
-                fx.tre(t.fdi, &t.cbct_to_ios),
-                t.iterations,
-                t.converged,
-                t.sd_mm
-            );
-        }
-    }
-}
