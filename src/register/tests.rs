@@ -218,3 +218,100 @@ fn output_frames_and_json() {
     );
     assert!(v["timing_ms"]["total"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn every_beyond_paper_option_still_recovers_the_clean_jaw() {
+    let fx = fixture(0.5, 0.1);
+    let base = RegisterOptions::default();
+    let FineMode::SmoothDrift(st, dr) = base.fine else {
+        panic!("default fine stage is the smooth drift model")
+    };
+    let mut stage = st;
+    stage.correspondence = Correspondence::ClosestPoint;
+    stage.weights.kernel = RobustKernel::Tukey;
+    stage.weights.kernel_k = 4.685;
+    stage.weights.max_normal_angle_deg = Some(60.0);
+    stage.weights.distance_mads = Some(4.0);
+    stage.full_resolution_iterations = 1;
+    let variants = [
+        RegisterOptions {
+            centroid: CentroidMode::CrownOnly {
+                radius_mm: 1.5,
+                passes: 2,
+            },
+            ..base.clone()
+        },
+        RegisterOptions {
+            centroid: CentroidMode::WholeToothArea,
+            coarse: Some(stage),
+            fine: FineMode::SmoothDrift(stage, dr),
+            ..base.clone()
+        },
+        RegisterOptions {
+            fine: FineMode::Sequential(stage),
+            ..base.clone()
+        },
+    ];
+    // Per-group fits (eq. 3) tilt the crowns of this inflated jaw more than the joint model.
+    for (o, limit) in variants.into_iter().zip([0.1, 0.1, 0.3]) {
+        let r = register(&fx.ios, &fx.cbct, &o).unwrap();
+        let m = max_tre(&fx, &r);
+        assert!(m < limit, "{:?}/{:?}: max TRE {m}", o.centroid, o.fine);
+    }
+}
+
+#[test]
+fn initial_transform_replaces_centroid_alignment() {
+    let fx = fixture(0.0, 0.0);
+    // Two teeth only: centroid alignment is impossible, a caller transform makes it work.
+    let ios: BTreeMap<u8, TriMesh> = [15u8, 16].iter().map(|f| (*f, fx.ios[f].clone())).collect();
+    assert!(register(&ios, &fx.cbct, &RegisterOptions::default()).is_err());
+    let truth = fx.truth[&16].0;
+    let nudge = Rigid::from_axis_angle_about(DVec3::Z, 0.01, DVec3::ZERO);
+    let o = RegisterOptions {
+        initial: Some(nudge.compose(&truth)),
+        ..RegisterOptions::default()
+    };
+    let r = register(&ios, &fx.cbct, &o).unwrap();
+    assert_eq!(r.teeth.len(), 2);
+    assert!(max_tre(&fx, &r) < 0.05, "{}", max_tre(&fx, &r));
+    let bad = RegisterOptions {
+        initial: Some(Rigid::new(
+            glam::DMat3::from_diagonal(DVec3::splat(2.0)),
+            DVec3::ZERO,
+        )),
+        ..RegisterOptions::default()
+    };
+    assert_eq!(
+        register(&ios, &fx.cbct, &bad).unwrap_err().kind(),
+        crate::ErrorKind::InvalidArgument
+    );
+}
+
+#[test]
+fn implausible_fine_step_is_reported_and_rejected() {
+    let mut fx = fixture(0.0, 0.0);
+    // Tooth 13's crown sits 2 mm away from where the rest of the arch puts it.
+    let shift = Rigid::from_translation(DVec3::new(0.0, 0.0, 2.0));
+    let c = fx.ios[&13].transformed(&shift);
+    fx.ios.insert(13, c);
+    let mut o = RegisterOptions::default();
+    if let FineMode::SmoothDrift(_, d) = &mut o.fine {
+        d.smooth_mm = 0.0;
+        d.smooth_rotation = 0.0;
+    }
+    o.guard.max_fine_correction_mm = 1.0;
+    let r = register(&fx.ios, &fx.cbct, &o).unwrap();
+    let t = &r.teeth[&13];
+    assert!(
+        t.warnings.iter().any(|w| w.contains("plausible drift")),
+        "{:?}",
+        t.warnings
+    );
+    assert_eq!(t.fine_correction_mm, 0.0);
+    assert!(
+        r.teeth[&16].warnings.is_empty(),
+        "{:?}",
+        r.teeth[&16].warnings
+    );
+}
