@@ -16,6 +16,7 @@ pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod phantom;
+pub mod session;
 
 #[allow(unsafe_code)]
 pub mod ffi;
