@@ -126,6 +126,57 @@ inline std::map<int32_t, Part> split(const std::vector<uint32_t>& tris,
   return parts;
 }
 
+/// Independent non-manifold census of a triangle mesh: edges used by more than two faces (or
+/// twice in one direction), and vertices whose faces form more than one edge-connected fan.
+struct Manifoldness {
+  size_t bad_edges = 0;
+  size_t bad_vertices = 0;
+  bool ok() const { return bad_edges == 0 && bad_vertices == 0; }
+};
+
+inline Manifoldness manifoldness(const std::vector<uint32_t>& tris, size_t nverts) {
+  Manifoldness m;
+  std::map<std::pair<uint32_t, uint32_t>, std::pair<int, int>> edges;  // (lo,hi) -> (fwd, back)
+  for (size_t f = 0; f < tris.size() / 3; f++)
+    for (int k = 0; k < 3; k++) {
+      uint32_t a = tris[3 * f + k], b = tris[3 * f + (k + 1) % 3];
+      auto& e = edges[{std::min(a, b), std::max(a, b)}];
+      (a < b ? e.first : e.second)++;
+    }
+  for (const auto& kv : edges)
+    if (kv.second.first + kv.second.second > 2 || kv.second.first > 1 || kv.second.second > 1)
+      m.bad_edges++;
+  // Fans: per vertex, union the incident faces that share another vertex with each other.
+  std::vector<std::vector<uint32_t>> faces_of(nverts);
+  for (size_t f = 0; f < tris.size() / 3; f++)
+    for (int k = 0; k < 3; k++) faces_of[tris[3 * f + k]].push_back(static_cast<uint32_t>(f));
+  for (size_t v = 0; v < nverts; v++) {
+    const auto& fs = faces_of[v];
+    if (fs.size() < 2) continue;
+    std::vector<size_t> parent(fs.size());
+    for (size_t i = 0; i < fs.size(); i++) parent[i] = i;
+    auto find = [&](size_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::map<uint32_t, size_t> first_with;  // other vertex -> first fan face using it
+    for (size_t i = 0; i < fs.size(); i++)
+      for (int k = 0; k < 3; k++) {
+        uint32_t w = tris[3 * fs[i] + k];
+        if (w == v) continue;
+        auto it = first_with.find(w);
+        if (it == first_with.end())
+          first_with[w] = i;
+        else
+          parent[find(i)] = find(it->second);
+      }
+    size_t roots = 0;
+    for (size_t i = 0; i < fs.size(); i++) roots += find(i) == i;
+    if (roots > 1) m.bad_vertices++;
+  }
+  return m;
+}
+
 inline std::string env_or_empty(const char* name) {
   const char* v = std::getenv(name);
   return v ? std::string(v) : std::string();
