@@ -258,7 +258,7 @@ pub unsafe extern "C" fn toothfuse_session_last_error(
 /// any failure the session is unchanged and the message names the tooth and vertex/face.
 ///
 /// # Safety
-/// `session` must be a live session; `vertices` must hold
+/// `session` must be NULL or a live session; `vertices` must hold
 /// `(vertex_count - 1) * stride_bytes + 3 * sizeof(scalar)` readable bytes and `indices`
 /// `index_count` readable `uint32_t` (4-byte aligned).
 #[unsafe(no_mangle)]
