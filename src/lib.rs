@@ -17,6 +17,7 @@ pub mod io;
 pub mod mesh;
 pub mod phantom;
 pub mod session;
+pub mod units;
 
 #[allow(unsafe_code)]
 pub mod ffi;
