@@ -170,6 +170,62 @@ TEST(RealData, MeshLabelerIosScanSplitsInto14CrownsByFaceLabel) {
   }
 }
 
+// The same scan with IOS repair on: the whole jaw goes in and every crown is a manifold disk
+// with exactly one margin loop, every kept vertex at its exact input position.
+TEST(RealData, MeshLabelerIosScanWithRepairGives14OneLoopCrowns) {
+  const std::string path = real_data() + "/ios_mesh_labeler/Example_01.vtp";
+  if (!exists(path)) GTEST_SKIP() << "real data not found: " << path << " (set TOOTHFUSE_REAL_DATA)";
+  vtkNew<vtkXMLPolyDataReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkPolyData* pd = reader->GetOutput();
+  vtkDataArray* labels = pd->GetCellData()->GetArray("Label");
+  ASSERT_NE(labels, nullptr);
+  const Flat f = flatten(pd);  // double copies of the float points: exact
+  std::vector<int32_t> fdi(static_cast<size_t>(labels->GetNumberOfTuples()));
+  for (size_t i = 0; i < fdi.size(); i++)
+    fdi[i] = mesh_labeler_to_fdi(static_cast<int32_t>(labels->GetComponent(static_cast<vtkIdType>(i), 0)));
+  tf::Session s;
+  ASSERT_EQ(toothfuse_session_set_ios_repair(s.get(), true, 0.5), TOOTHFUSE_STATUS_OK);
+  ASSERT_EQ(toothfuse_session_add_jaw(s.get(), TOOTHFUSE_MODALITY_IOS, f.xyz.data(), f.xyz.size() / 3,
+                                      3 * sizeof(double), TOOTHFUSE_SCALAR_FLOAT64, f.tris.data(),
+                                      f.tris.size(), fdi.data(), fdi.size(),
+                                      TOOTHFUSE_LABEL_DOMAIN_FACE),
+            TOOTHFUSE_STATUS_OK)
+      << s.error();
+  const std::vector<int32_t> want = {11, 12, 13, 14, 15, 16, 17, 21, 22, 23, 24, 25, 26, 27};
+  ASSERT_EQ(s.teeth(TOOTHFUSE_MODALITY_IOS), want);
+  for (int32_t t : want) {
+    const toothfuse_mesh_info info = s.info(TOOTHFUSE_MODALITY_IOS, t);
+    toothfuse_repair_report rep{};
+    ASSERT_EQ(toothfuse_session_repair_report(s.get(), TOOTHFUSE_MODALITY_IOS, t, &rep),
+              TOOTHFUSE_STATUS_OK);
+    std::cout << "repaired IOS crown " << t << ": " << info.vertex_count << " vertices, "
+              << info.boundary_loops << " loop(s) (margin " << info.longest_loop_vertices
+              << " vertices); dropped " << rep.degenerate_faces << " degenerate, "
+              << rep.duplicate_faces << " duplicate, " << rep.non_manifold_faces
+              << " non-manifold, " << rep.island_faces << " island faces; split "
+              << rep.split_vertices << " bow-ties; filled " << rep.filled_holes << " holes\n";
+    EXPECT_TRUE(rep.repaired);
+    EXPECT_TRUE(info.manifold && !info.closed) << t;
+    EXPECT_EQ(info.boundary_loops, 1u) << "tooth " << t << ": one margin loop expected";
+    EXPECT_EQ(info.components, 1u) << t;
+    const std::vector<double> p = s.positions(TOOTHFUSE_MODALITY_IOS, t);
+    const std::vector<uint32_t> src = s.sources(TOOTHFUSE_MODALITY_IOS, t);
+    size_t added = 0, moved = 0;
+    for (size_t i = 0; i < src.size(); i++) {
+      if (src[i] == UINT32_MAX) {
+        added++;
+        continue;
+      }
+      for (int k = 0; k < 3; k++)
+        if (p[3 * i + k] != f.xyz[3 * src[i] + k]) moved++;
+    }
+    EXPECT_EQ(added, rep.added_vertices) << t;
+    EXPECT_EQ(moved, 0u) << "tooth " << t << ": a kept vertex moved";
+  }
+}
+
 // Open-Full-Jaw patient 26, Universal (UNN) numbering -> FDI.
 int32_t unn_to_fdi(int n) {
   if (n >= 1 && n <= 8) return 19 - n;       // maxilla right: 1 -> 18 ... 8 -> 11

@@ -161,6 +161,49 @@ typedef struct toothfuse_mesh_view {
 typedef uint32_t toothfuse_scalar;
 
 /**
+ * What IOS repair changed in one tooth (see `toothfuse_session_set_ios_repair`).
+ */
+typedef struct toothfuse_repair_report {
+  /**
+   * The tooth went through repair (IOS with repair on when it was added); all counts are 0
+   * otherwise.
+   */
+  bool repaired;
+  /**
+   * Triangles dropped for repeating a vertex or having zero area.
+   */
+  size_t degenerate_faces;
+  /**
+   * Triangles dropped as duplicates of an earlier triangle.
+   */
+  size_t duplicate_faces;
+  /**
+   * Triangles dropped because their edge already had two triangles.
+   */
+  size_t non_manifold_faces;
+  /**
+   * Triangles flipped to agree with their neighbours.
+   */
+  size_t flipped_faces;
+  /**
+   * Triangles dropped with components other than the largest.
+   */
+  size_t island_faces;
+  /**
+   * Vertices duplicated to split bow-ties.
+   */
+  size_t split_vertices;
+  /**
+   * Holes filled (boundary loops other than the margin).
+   */
+  size_t filled_holes;
+  /**
+   * Vertices added as hole centres (source vertex UINT32_MAX).
+   */
+  size_t added_vertices;
+} toothfuse_repair_report;
+
+/**
  * Topological facts about a held mesh.
  */
 typedef struct toothfuse_mesh_info {
@@ -309,7 +352,7 @@ toothfuse_status toothfuse_session_copy_indices(const struct toothfuse_session *
 /**
  * Copies, for each vertex of tooth `fdi` of `modality`, the index of the vertex it came from
  * in the buffer the caller passed (the jaw mesh for `toothfuse_session_add_jaw`, the identity
- * for `toothfuse_session_add_tooth`). Room for the vertex count is needed, else
+ * for `toothfuse_session_add_tooth`; UINT32_MAX for a vertex IOS repair added). Room for the vertex count is needed, else
  * TOOTHFUSE_STATUS_BUFFER_TOO_SMALL (nothing written).
  *
  * # Safety
@@ -321,6 +364,18 @@ toothfuse_status toothfuse_session_copy_source_vertices(const struct toothfuse_s
                                                         int32_t fdi,
                                                         uint32_t *source_out,
                                                         size_t capacity);
+
+/**
+ * Writes what IOS repair changed in tooth `fdi` of `modality` to `*report_out` (all zero, with
+ * `repaired` false, for a tooth added without repair).
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `report_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_repair_report(const struct toothfuse_session *session,
+                                                 toothfuse_modality modality,
+                                                 int32_t fdi,
+                                                 struct toothfuse_repair_report *report_out);
 
 /**
  * Writes topology facts (boundary loops, closed, manifold, components, volume, area) about
@@ -422,6 +477,25 @@ toothfuse_status toothfuse_session_add_jaw(struct toothfuse_session *session,
                                            const int32_t *labels,
                                            size_t label_count,
                                            toothfuse_label_domain domain);
+
+/**
+ * Switches repair of IOS crowns on entry on or off (off by default; affects later adds only).
+ *
+ * When on, every IOS crown (from `toothfuse_session_add_tooth` or split from a jaw) first goes
+ * through the library's open-surface repair: degenerate and duplicate triangles are dropped, an
+ * edge keeps at most two triangles, orientation is made consistent, bow-tie vertices are
+ * duplicated, islands other than the largest are dropped, and holes whose perimeter is at most
+ * `max_hole_fraction` (0 to 1) of the margin's are filled with a centre vertex. Kept vertices keep
+ * their exact positions; a filled hole's centre has source vertex UINT32_MAX in
+ * `toothfuse_session_copy_source_vertices`. `toothfuse_session_repair_report` says what changed.
+ * Real scans need this: most crowns of a decimated, segmented scan are not 2-manifold as given.
+ *
+ * # Safety
+ * `session` must be NULL or a live session.
+ */
+toothfuse_status toothfuse_session_set_ios_repair(struct toothfuse_session *session,
+                                                  bool enabled,
+                                                  double max_hole_fraction);
 
 /**
  * Removes tooth `fdi` of `modality`; TOOTHFUSE_STATUS_MISSING_DATA if it is not held.

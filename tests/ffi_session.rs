@@ -690,3 +690,79 @@ fn unused_pointer_type_is_void() {
         usize,
     ) -> toothfuse_status = toothfuse_session_add_tooth;
 }
+
+#[test]
+fn ios_repair_on_request() {
+    let s = Session::new();
+    // A crown patch with a duplicated triangle and a stray island triangle.
+    let (mut v, mut t) = square();
+    t.extend([2, 1, 0]); // reversed duplicate of face 0
+    v.extend([5.0, 5.0, 0.0, 6.0, 5.0, 0.0, 5.0, 6.0, 0.0]);
+    t.extend([4, 5, 6]);
+    assert_eq!(
+        s.add(TOOTHFUSE_MODALITY_IOS, 14, &v, &t),
+        toothfuse_status::NotManifold
+    );
+    assert_eq!(
+        s.error(),
+        "tooth 14: face 2 duplicates face 0 (same three vertices)"
+    );
+    // SAFETY: live session.
+    let st = unsafe { toothfuse_session_set_ios_repair(s.0, true, f64::NAN) };
+    assert_eq!(st, toothfuse_status::InvalidArgument);
+    assert_eq!(
+        s.error(),
+        "invalid argument: max_hole_fraction NaN is not in [0, 1]"
+    );
+    // SAFETY: live session.
+    let st = unsafe { toothfuse_session_set_ios_repair(s.0, true, 0.5) };
+    assert_eq!(st, toothfuse_status::Ok);
+    assert_eq!(
+        s.add(TOOTHFUSE_MODALITY_IOS, 14, &v, &t),
+        toothfuse_status::Ok,
+        "{}",
+        s.error()
+    );
+    let mut rep = toothfuse_repair_report::default();
+    let mut info = toothfuse_mesh_info::default();
+    let mut src = [0u32; 4];
+    // SAFETY: live session, valid out pointers.
+    unsafe {
+        assert_eq!(
+            toothfuse_session_repair_report(s.0, TOOTHFUSE_MODALITY_IOS, 14, &mut rep),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_mesh_info(s.0, TOOTHFUSE_MODALITY_IOS, 14, &mut info),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_copy_source_vertices(
+                s.0,
+                TOOTHFUSE_MODALITY_IOS,
+                14,
+                src.as_mut_ptr(),
+                4
+            ),
+            toothfuse_status::Ok
+        );
+    }
+    assert!(rep.repaired);
+    assert_eq!((rep.duplicate_faces, rep.island_faces), (1, 1), "{rep:?}");
+    assert_eq!((info.vertex_count, info.triangle_count), (4, 2));
+    assert_eq!((info.boundary_loops, info.components), (1, 1));
+    let p = s.positions(TOOTHFUSE_MODALITY_IOS, 14);
+    for (i, &j) in src.iter().enumerate() {
+        assert_eq!(&p[3 * i..3 * i + 3], &v[3 * j as usize..3 * j as usize + 3]);
+    }
+    // CBCT teeth are not repaired; their report says so.
+    let (c, ct) = cube(1.0, [0.0; 3]);
+    assert_eq!(
+        s.add(TOOTHFUSE_MODALITY_CBCT, 14, &c, &ct),
+        toothfuse_status::Ok
+    );
+    // SAFETY: live session, valid out pointer.
+    let st = unsafe { toothfuse_session_repair_report(s.0, TOOTHFUSE_MODALITY_CBCT, 14, &mut rep) };
+    assert_eq!(st, toothfuse_status::Ok);
+    assert_eq!(rep, toothfuse_repair_report::default());
+}

@@ -59,6 +59,20 @@ class BindingsTest(unittest.TestCase):
             self.assertEqual(s.teeth(toothfuse.IOS), [11])
             self.assertEqual(s.teeth(toothfuse.CBCT), [])
 
+    def test_ios_repair(self):
+        with toothfuse.Session() as s:
+            # A bow tie: two crown triangles touching at one vertex.
+            v = [0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0]
+            t = [0, 1, 2, 0, 3, 4]
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_tooth(toothfuse.IOS, 31, v, t)
+            self.assertIn("vertex 0 is non-manifold", str(e.exception))
+            s.set_ios_repair(True)
+            s.add_tooth(toothfuse.IOS, 31, v, t)
+            self.assertTrue(s.info(toothfuse.IOS, 31)["manifold"])
+            with self.assertRaises(toothfuse.ToothfuseError):
+                s.set_ios_repair(True, 2.0)
+
 
 if __name__ == "__main__":
     unittest.main()

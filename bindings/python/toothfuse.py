@@ -82,6 +82,7 @@ _buf = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32, _u32
 _add_tooth = _fn("toothfuse_session_add_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32, *_buf)
 _add_jaw = _fn("toothfuse_session_add_jaw", _st, _S, ctypes.c_uint32, *_buf, _i32_p,
                ctypes.c_size_t, ctypes.c_uint32)
+_set_repair = _fn("toothfuse_session_set_ios_repair", _st, _S, ctypes.c_bool, ctypes.c_double)
 _remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
 _count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
 _list = _fn("toothfuse_session_list_teeth", _st, _S, ctypes.c_uint32, _i32_p, ctypes.c_size_t,
@@ -186,6 +187,10 @@ class Session:
         self._check(_add_jaw(self._h, modality, vp, n, stride, scalar, tp, len(t), lp, len(lab),
                              _FACE if per_face else _VERTEX))
         return self.teeth(modality)
+
+    def set_ios_repair(self, enabled, max_hole_fraction=0.5):
+        """Repair IOS crowns on entry (real scans need it); off by default."""
+        self._check(_set_repair(self._h, enabled, max_hole_fraction))
 
     def remove_tooth(self, modality, fdi):
         """Removes a held tooth."""

@@ -72,6 +72,32 @@ pub struct toothfuse_mesh_info {
     pub area: f64,
 }
 
+/// What IOS repair changed in one tooth (see `toothfuse_session_set_ios_repair`).
+#[repr(C)]
+#[allow(non_camel_case_types)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct toothfuse_repair_report {
+    /// The tooth went through repair (IOS with repair on when it was added); all counts are 0
+    /// otherwise.
+    pub repaired: bool,
+    /// Triangles dropped for repeating a vertex or having zero area.
+    pub degenerate_faces: usize,
+    /// Triangles dropped as duplicates of an earlier triangle.
+    pub duplicate_faces: usize,
+    /// Triangles dropped because their edge already had two triangles.
+    pub non_manifold_faces: usize,
+    /// Triangles flipped to agree with their neighbours.
+    pub flipped_faces: usize,
+    /// Triangles dropped with components other than the largest.
+    pub island_faces: usize,
+    /// Vertices duplicated to split bow-ties.
+    pub split_vertices: usize,
+    /// Holes filled (boundary loops other than the margin).
+    pub filled_holes: usize,
+    /// Vertices added as hole centres (source vertex UINT32_MAX).
+    pub added_vertices: usize,
+}
+
 /// Finds the tooth, naming it on failure.
 fn find(s: &Session, modality: toothfuse_modality, fdi: i32) -> FfiResult<&Tooth> {
     let m: Modality = decode_modality(modality)?;
@@ -241,7 +267,7 @@ pub unsafe extern "C" fn toothfuse_session_copy_indices(
 
 /// Copies, for each vertex of tooth `fdi` of `modality`, the index of the vertex it came from
 /// in the buffer the caller passed (the jaw mesh for `toothfuse_session_add_jaw`, the identity
-/// for `toothfuse_session_add_tooth`). Room for the vertex count is needed, else
+/// for `toothfuse_session_add_tooth`; UINT32_MAX for a vertex IOS repair added). Room for the vertex count is needed, else
 /// TOOTHFUSE_STATUS_BUFFER_TOO_SMALL (nothing written).
 ///
 /// # Safety
@@ -266,6 +292,44 @@ pub unsafe extern "C" fn toothfuse_session_copy_source_vertices(
         let out = unsafe { slice_out(source_out, n, "source_out") }?;
         out.copy_from_slice(&t.source_vertex);
         Ok(())
+        };
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_session(session, body) }
+    }
+}
+
+/// Writes what IOS repair changed in tooth `fdi` of `modality` to `*report_out` (all zero, with
+/// `repaired` false, for a tooth added without repair).
+///
+/// # Safety
+/// `session` must be NULL or a live session; `report_out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_repair_report(
+    session: *const toothfuse_session,
+    modality: toothfuse_modality,
+    fdi: i32,
+    report_out: *mut toothfuse_repair_report,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        let body = |s: &Session| -> FfiResult {
+            check_out(report_out, "report_out")?;
+            let t = find(s, modality, fdi)?;
+            let r = match &t.repair {
+                None => toothfuse_repair_report::default(),
+                Some(r) => toothfuse_repair_report {
+                    repaired: true,
+                    degenerate_faces: r.degenerate_faces,
+                    duplicate_faces: r.duplicate_faces,
+                    non_manifold_faces: r.non_manifold_faces,
+                    flipped_faces: r.flipped_faces,
+                    island_faces: r.island_faces,
+                    split_vertices: r.split_vertices,
+                    filled_holes: r.filled_holes,
+                    added_vertices: r.added_vertices,
+                },
+            };
+            // SAFETY: forwarded contract on `report_out`.
+            unsafe { write_out(report_out, r, "report_out") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

@@ -344,6 +344,36 @@ pub unsafe extern "C" fn toothfuse_session_add_jaw(
     }
 }
 
+/// Switches repair of IOS crowns on entry on or off (off by default; affects later adds only).
+///
+/// When on, every IOS crown (from `toothfuse_session_add_tooth` or split from a jaw) first goes
+/// through the library's open-surface repair: degenerate and duplicate triangles are dropped, an
+/// edge keeps at most two triangles, orientation is made consistent, bow-tie vertices are
+/// duplicated, islands other than the largest are dropped, and holes whose perimeter is at most
+/// `max_hole_fraction` (0 to 1) of the margin's are filled with a centre vertex. Kept vertices keep
+/// their exact positions; a filled hole's centre has source vertex UINT32_MAX in
+/// `toothfuse_session_copy_source_vertices`. `toothfuse_session_repair_report` says what changed.
+/// Real scans need this: most crowns of a decimated, segmented scan are not 2-manifold as given.
+///
+/// # Safety
+/// `session` must be NULL or a live session.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_set_ios_repair(
+    session: *mut toothfuse_session,
+    enabled: bool,
+    max_hole_fraction: f64,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        let body = |s: &mut Session| -> FfiResult {
+            let opts = enabled.then_some(crate::mesh::RepairOptions { max_hole_fraction });
+            s.set_ios_repair(opts)?;
+            Ok(())
+        };
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_session_mut(session, body) }
+    }
+}
+
 /// Removes tooth `fdi` of `modality`; TOOTHFUSE_STATUS_MISSING_DATA if it is not held.
 ///
 /// # Safety
