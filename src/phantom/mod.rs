@@ -7,11 +7,56 @@
 //! simulation) moved by another random pose `world_to_cbct`. So the true per-tooth mapping from
 //! the CBCT frame to the IOS frame is `world_to_ios ∘ ios_drift ∘ world_to_cbct⁻¹`.
 
+mod cbct;
+mod crown_topology;
+mod drift;
+mod generate;
+mod gingiva;
+mod grid;
+mod ios;
+mod layout;
+mod project;
+pub mod rng;
+mod shape;
+mod surface_nets;
+
+pub use cbct::CbctRealism;
+pub use grid::Grid;
+pub use ios::IosRealism;
+pub use surface_nets::{extract_closed, largest_component, surface_nets};
+
 use crate::arch::Jaw;
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Result, Rigid};
 use glam::DVec3;
 use std::collections::BTreeMap;
+
+/// Artefact amounts of the simulated modalities (realistic by default).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Realism {
+    /// IOS artefacts.
+    pub ios: IosRealism,
+    /// CBCT artefacts.
+    pub cbct: CbctRealism,
+    /// Scale of the IOS stitching drift (1 = ~0.5° and ~0.2 mm at the far end of the arch).
+    pub drift_scale: f64,
+    /// Extra drift factor of [`Variant::HeavyDrift`].
+    pub heavy_drift_factor: f64,
+    /// Surface-nets spacing of the true surfaces (mm).
+    pub truth_spacing: f64,
+}
+
+impl Default for Realism {
+    fn default() -> Self {
+        Self {
+            ios: IosRealism::default(),
+            cbct: CbctRealism::default(),
+            drift_scale: 1.0,
+            heavy_drift_factor: 4.0,
+            truth_spacing: 0.25,
+        }
+    }
+}
 
 /// Which scenario to generate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -68,6 +113,8 @@ pub struct PhantomOptions {
     /// Real whole-tooth meshes (closed, mm, keyed by FDI) to use as the true anatomy instead of
     /// parametric teeth; they are placed on the arch as they are (their own frame is kept).
     pub anatomy: Option<BTreeMap<u8, TriMesh>>,
+    /// Artefact amounts.
+    pub realism: Realism,
 }
 
 impl Default for PhantomOptions {
@@ -77,6 +124,7 @@ impl Default for PhantomOptions {
             jaw: Jaw::Upper,
             variant: Variant::Full,
             anatomy: None,
+            realism: Realism::default(),
         }
     }
 }
@@ -150,9 +198,27 @@ impl ToothTruth {
 impl Phantom {
     /// Generates a phantom. Deterministic in `opts`.
     pub fn generate(opts: &PhantomOptions) -> Result<Phantom> {
-        let _ = opts;
-        Err(crate::Error::WrongState(
-            "phantom generator not built yet".into(),
-        ))
+        generate::generate(opts)
+    }
+
+    /// The IOS crowns split by vertex label (label 0, the gingiva, left out), IOS frame.
+    pub fn ios_crowns(&self) -> BTreeMap<u8, TriMesh> {
+        let Some(labels) = &self.ios.vertex_labels else {
+            return BTreeMap::new();
+        };
+        crate::mesh::split_by_vertex_labels(&self.ios.mesh, labels)
+            .map(|parts| {
+                parts
+                    .into_iter()
+                    .filter(|(l, _)| *l > 0 && *l < 256)
+                    .map(|(l, s)| (l as u8, s.mesh))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// Teeth of the truth in arch order.
+    pub fn teeth_in_arch_order(&self) -> Vec<u8> {
+        crate::arch::arch_order(&self.truth.teeth.keys().copied().collect::<Vec<_>>())
     }
 }
