@@ -18,6 +18,7 @@ pub mod io;
 pub mod mesh;
 pub mod phantom;
 pub mod register;
+pub mod session;
 pub mod units;
 
 #[allow(unsafe_code)]

@@ -1,1 +1,24 @@
-//! The C ABI: the only unsafe code in the crate.
+//! The C ABI: the only unsafe code in the crate. The header `include/toothfuse.h` is generated
+//! from this module by cbindgen (`cbindgen.toml`); never edit it by hand.
+//!
+//! Conventions (after rustls-ffi and meshoptimizer): opaque handles with `_new`/`_free` (free
+//! is a no-op on NULL); the handle first (`const` when only read), inputs next, `*_out`
+//! parameters last and written only on success; every fallible function returns a
+//! [`toothfuse_status`], the detailed message is kept on the session
+//! (`toothfuse_session_last_error`); vertex buffers are pointer + count + byte stride + scalar
+//! type with `uint32_t` triangles, copied during the call and never kept. Every body runs inside
+//! a panic boundary; a panic poisons the session.
+//!
+//! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
+//! (reading a tooth back), plus [`status`], [`version`] and the [`boundary`] helpers.
+
+pub mod boundary;
+pub mod mesh;
+pub mod session;
+pub mod status;
+pub mod version;
+
+pub use mesh::*;
+pub use session::*;
+pub use status::*;
+pub use version::*;

@@ -1,0 +1,78 @@
+"""Test of the ctypes bindings (run by ctest with TOOTHFUSE_LIBRARY set)."""
+
+import array
+import math
+import unittest
+
+import toothfuse
+
+CUBE = [0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 0, 0, 2, 2, 0, 2, 2, 2, 2, 0, 2, 2]
+CUBE = [c + 0.1 for c in CUBE]
+TRIS = [0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+        1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7]
+
+
+class BindingsTest(unittest.TestCase):
+    def test_versions(self):
+        self.assertEqual(toothfuse.abi_version(), toothfuse.ABI_VERSION)
+        self.assertRegex(toothfuse.version(), r"^\d+\.\d+\.\d+$")
+
+    def test_add_list_read_back(self):
+        with toothfuse.Session() as s:
+            s.add_tooth(toothfuse.CBCT, 16, CUBE, TRIS)
+            s.add_tooth(toothfuse.CBCT, 15, array.array("f", CUBE), TRIS)
+            self.assertEqual(s.teeth(toothfuse.CBCT), [15, 16])
+            self.assertEqual(s.teeth(toothfuse.IOS), [])
+            pos, idx = s.mesh(toothfuse.CBCT, 16)
+            self.assertEqual(list(pos), CUBE)  # bit for bit
+            self.assertEqual(list(idx), TRIS)
+            pos, _ = s.mesh(toothfuse.CBCT, 15)
+            self.assertEqual(list(pos), list(array.array("f", CUBE)))  # exact float -> double
+            info = s.info(toothfuse.CBCT, 16)
+            self.assertTrue(info["closed"] and info["manifold"])
+            self.assertTrue(math.isclose(info["signed_volume"], 8.0, rel_tol=1e-12))
+            s.remove_tooth(toothfuse.CBCT, 15)
+            self.assertEqual(s.teeth(toothfuse.CBCT), [16])
+
+    def test_jaw_and_errors(self):
+        with toothfuse.Session() as s:
+            # Per-face labels: the cube's first 6 faces are crown 11 (open), the rest gingiva.
+            labels = [11] * 6 + [0] * 6
+            self.assertEqual(s.add_jaw(toothfuse.IOS, CUBE, TRIS, labels, per_face=True), [11])
+            self.assertEqual(s.info(toothfuse.IOS, 11)["boundary_loops"], 1)
+            src = s.source_vertices(toothfuse.IOS, 11)
+            pos, _ = s.mesh(toothfuse.IOS, 11)
+            for i, j in enumerate(src):
+                self.assertEqual(list(pos[3 * i:3 * i + 3]), CUBE[3 * j:3 * j + 3])
+            bad = list(CUBE)
+            bad[4] = float("nan")
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_tooth(toothfuse.CBCT, 21, bad, TRIS)
+            self.assertEqual(e.exception.status, 3)
+            self.assertIn("tooth 21: vertex 1 has a non-finite coordinate", str(e.exception))
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_jaw(toothfuse.IOS, CUBE, TRIS, [19] * 12, per_face=True)
+            self.assertIn("label 19 (on face 0) is not an FDI tooth number", str(e.exception))
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.mesh(toothfuse.CBCT, 21)
+            self.assertIn("no CBCT tooth 21", str(e.exception))
+            self.assertEqual(s.teeth(toothfuse.IOS), [11])
+            self.assertEqual(s.teeth(toothfuse.CBCT), [])
+
+    def test_ios_repair(self):
+        with toothfuse.Session() as s:
+            # A bow tie: two crown triangles touching at one vertex.
+            v = [0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0]
+            t = [0, 1, 2, 0, 3, 4]
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_tooth(toothfuse.IOS, 31, v, t)
+            self.assertIn("vertex 0 is non-manifold", str(e.exception))
+            s.set_ios_repair(True)
+            s.add_tooth(toothfuse.IOS, 31, v, t)
+            self.assertTrue(s.info(toothfuse.IOS, 31)["manifold"])
+            with self.assertRaises(toothfuse.ToothfuseError):
+                s.set_ios_repair(True, 2.0)
+
+
+if __name__ == "__main__":
+    unittest.main()
