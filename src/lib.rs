@@ -15,6 +15,7 @@ pub mod error;
 pub mod geom;
 pub mod io;
 pub mod mesh;
+pub mod mesh_check;
 pub mod phantom;
 
 #[allow(unsafe_code)]

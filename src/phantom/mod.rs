@@ -151,6 +151,8 @@ impl Phantom {
     /// Generates a phantom. Deterministic in `opts`.
     pub fn generate(opts: &PhantomOptions) -> Result<Phantom> {
         let _ = opts;
-        Err(crate::Error::WrongState("phantom generator not built yet".into()))
+        Err(crate::Error::WrongState(
+            "phantom generator not built yet".into(),
+        ))
     }
 }
