@@ -16,6 +16,9 @@ pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod mesh_check;
+pub mod cut;
+pub mod stitch;
+pub mod fuse;
 pub mod phantom;
 
 #[allow(unsafe_code)]

@@ -1,0 +1,207 @@
+//! One tooth: IOS crown + CBCT tooth + their rigid transforms into the output frame → one closed,
+//! manifold, outward-oriented mesh that holds every IOS crown vertex at exactly its transformed
+//! position (paper section 2.3, Algorithm 1 line 2–7 for one tooth).
+
+use super::quality::{self, ToothQuality};
+use super::{FuseOptions, VertexSource};
+use crate::cut::{self, ToothFrame};
+use crate::mesh::{EdgeTopology, TriMesh, boundary_loops};
+use crate::stitch::{self, BandLoops, BandVertex};
+use crate::{Error, Result, Rigid};
+use glam::DVec3;
+
+/// A fused tooth.
+#[derive(Clone, Debug)]
+pub struct FusedTooth {
+    /// FDI number.
+    pub fdi: u8,
+    /// The fused closed mesh, output frame. Vertices: first the IOS crown's (same order as the
+    /// crown input), then hole fills, band interior, CBCT root.
+    pub mesh: TriMesh,
+    /// Per vertex: [`VertexSource`] as `u8` (0 IOS, 1 band or fill, 2 CBCT).
+    pub source: Vec<u8>,
+    /// Quality report.
+    pub quality: ToothQuality,
+    /// Warnings (filled holes, flipped input orientation, self-intersections).
+    pub warnings: Vec<String>,
+}
+
+fn polyline_length(pts: &[DVec3]) -> f64 {
+    (0..pts.len())
+        .map(|i| (pts[(i + 1) % pts.len()] - pts[i]).length())
+        .sum()
+}
+
+/// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
+fn loop_dirs(mesh: &TriMesh, lp: &[u32], axis: DVec3) -> Vec<DVec3> {
+    let normals = mesh.vertex_normals();
+    let n = lp.len();
+    (0..n)
+        .map(|i| {
+            let p = |k: usize| mesh.positions[lp[k] as usize];
+            let t = (p((i + 1) % n) - p((i + n - 1) % n)).normalize_or_zero();
+            let nv = normals[lp[i] as usize];
+            let mut d = nv.cross(t).normalize_or_zero();
+            if d.dot(axis) < 0.0 {
+                d = -d;
+            }
+            if d == DVec3::ZERO { axis } else { d }
+        })
+        .collect()
+}
+
+/// Fuses one tooth. `ios_crown` (IOS frame) must be an open crown whose longest boundary loop is
+/// the gingival margin; other boundary loops (small holes) are filled. `cbct` (CBCT frame) must
+/// be closed and manifold.
+pub fn fuse_tooth(
+    fdi: u8,
+    ios_crown: &TriMesh,
+    cbct: &TriMesh,
+    ios_to_output: &Rigid,
+    cbct_to_output: &Rigid,
+    opts: &FuseOptions,
+) -> Result<FusedTooth> {
+    fuse_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts).map_err(|e| e.in_tooth(fdi))
+}
+
+fn fuse_inner(
+    fdi: u8,
+    ios_crown: &TriMesh,
+    cbct: &TriMesh,
+    ios_to_output: &Rigid,
+    cbct_to_output: &Rigid,
+    opts: &FuseOptions,
+) -> Result<FusedTooth> {
+    let mut warnings = Vec::new();
+    ios_crown.validate(&Default::default())?;
+    let mut crown = ios_crown.transformed(ios_to_output);
+    let mut root_in = cbct.transformed(cbct_to_output);
+    if root_in.signed_volume() < 0.0 {
+        root_in.flip();
+        warnings.push("CBCT tooth was inward-oriented; flipped".into());
+    }
+    // Margin = the longest boundary loop; the others are holes to fill.
+    let mut loops = boundary_loops(&crown);
+    if loops.is_empty() {
+        return Err(Error::InvalidArgument("IOS crown has no boundary (no gingival margin)".into()));
+    }
+    let lens: Vec<f64> = loops
+        .iter()
+        .map(|l| polyline_length(&l.iter().map(|&v| crown.positions[v as usize]).collect::<Vec<_>>()))
+        .collect();
+    let mi = (0..loops.len())
+        .max_by(|&a, &b| lens[a].total_cmp(&lens[b]).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let mut margin = loops.swap_remove(mi);
+    let holes = loops;
+    let crown_centroid = crate::geom::centroid(&crown.positions).unwrap_or(DVec3::ZERO);
+    let margin_pts: Vec<DVec3> = margin.iter().map(|&v| crown.positions[v as usize]).collect();
+    let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
+    // The crown lies to the left of its margin seen from outside: counter-clockwise about the
+    // axis. If not, the crown is inward-oriented: flip it (positions untouched).
+    if stitch::param::winding(&frame, &margin_pts) < 0.0 {
+        crown.flip();
+        margin.reverse();
+        warnings.push("IOS crown was inward-oriented; flipped".into());
+    }
+    let n_crown = crown.positions.len();
+    let mut mesh = crown.clone();
+    let mut source = vec![VertexSource::Ios as u8; n_crown];
+    // Fill small holes with a fan around their centroid.
+    for h in &holes {
+        let pts: Vec<DVec3> = h.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let c = crate::geom::centroid(&pts).unwrap_or(DVec3::ZERO);
+        let ci = mesh.positions.len() as u32;
+        mesh.positions.push(c);
+        source.push(VertexSource::Band as u8);
+        for i in 0..h.len() {
+            let (a, b) = (h[i], h[(i + 1) % h.len()]);
+            let hole = if opts_flipped(&warnings) { [a, b, ci] } else { [b, a, ci] };
+            mesh.triangles.push(hole);
+        }
+    }
+    if !holes.is_empty() {
+        warnings.push(format!("{} small hole(s) in the IOS crown filled", holes.len()));
+    }
+    let crown_dirs = loop_dirs(&mesh, &margin, frame.axis);
+    // Crown removal.
+    let rc = cut::cut_crown(&root_in, &margin_pts_of(&mesh, &margin), &frame, &opts.cut)?;
+    let lower_pts: Vec<DVec3> = rc.cut_loop.iter().map(|&v| rc.root.positions[v as usize]).collect();
+    let lower_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
+    let upper_pts = margin_pts_of(&mesh, &margin);
+    let band = stitch::build_band(
+        &BandLoops {
+            upper: &upper_pts,
+            upper_dir: &crown_dirs,
+            lower: &lower_pts,
+            lower_dir: &lower_dirs,
+        },
+        &frame,
+        &opts.stitch,
+    )?;
+    // Assemble: band interior, then root.
+    let band_off = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&band.points);
+    source.extend(std::iter::repeat_n(VertexSource::Band as u8, band.points.len()));
+    let root_off = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&rc.root.positions);
+    source.extend(std::iter::repeat_n(VertexSource::Cbct as u8, rc.root.positions.len()));
+    let map = |b: BandVertex| match b {
+        BandVertex::Upper(i) => margin[i as usize],
+        BandVertex::Lower(i) => rc.cut_loop[i as usize] + root_off,
+        BandVertex::Interior(i) => i + band_off,
+    };
+    let mut band_tris: Vec<[u32; 3]> = band.triangles.iter().map(|t| t.map(map)).collect();
+    // Orient the band against the crown: the crown holds margin[0] → margin[1].
+    let crown_topo = EdgeTopology::new(&mesh);
+    let (m0, m1) = (margin[0], margin[1 % margin.len()]);
+    debug_assert!(crown_topo.faces_of_directed(m0, m1).next().is_some());
+    let band_has = |a: u32, b: u32, tris: &[[u32; 3]]| {
+        tris.iter().any(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))
+    };
+    if band_has(m0, m1, &band_tris) {
+        for t in &mut band_tris {
+            t.swap(1, 2);
+        }
+    }
+    let band_start = mesh.triangles.len();
+    mesh.triangles.extend_from_slice(&band_tris);
+    let band_end = mesh.triangles.len();
+    let (c0, c1) = (rc.cut_loop[0] + root_off, rc.cut_loop[1] + root_off);
+    if band_has(c0, c1, &band_tris) {
+        return Err(Error::InvalidArgument(
+            "CBCT root and IOS crown have opposite orientations after the cut".into(),
+        ));
+    }
+    mesh.triangles
+        .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
+    let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
+    q.crown_vertices = n_crown;
+    q.holes_filled = holes.len();
+    q.cbct_faces_removed = rc.removed_faces;
+    if !(q.closed && q.manifold && q.components == 1) {
+        return Err(Error::InvalidArgument(format!(
+            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components)",
+            q.boundary_edges, q.non_manifold_edges, q.non_manifold_vertices, q.components
+        )));
+    }
+    if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
+        warnings.push(format!("{n} intersecting face pairs"));
+    }
+    let _ = fdi;
+    Ok(FusedTooth {
+        fdi,
+        mesh,
+        source,
+        quality: q,
+        warnings,
+    })
+}
+
+fn opts_flipped(w: &[String]) -> bool {
+    w.iter().any(|s| s.starts_with("IOS crown was inward"))
+}
+
+fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
+    margin.iter().map(|&v| mesh.positions[v as usize]).collect()
+}

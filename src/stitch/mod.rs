@@ -1,0 +1,314 @@
+//! Stitching (paper section 2.3.2, Algorithm 1): the band that closes the gap between the IOS
+//! margin loop and the CBCT cut loop.
+//!
+//! The band's two boundaries are exactly the two loops, vertex for vertex, so crown + band +
+//! root is closed by construction. The band is parametrised as an annulus (`φ` around the tooth
+//! × height fraction `v`, see [`param`]); its interior points come either from the paper's
+//! recursive interpolation ([`interp`], Algorithm 1 lines 5–6 and 9–24) or from graded rings
+//! (ours); they are triangulated with a constrained Delaunay triangulation (spade) in the
+//! log-polar plane with both loops as constraint polygons — our replacement for the paper's
+//! DELAUNAY3D (line 7), which cannot guarantee the boundaries.
+
+pub mod interp;
+pub mod param;
+
+use crate::cut::ToothFrame;
+use crate::{Error, Result};
+use glam::DVec3;
+use interp::{InterpOptions, ParamPoint};
+use param::{Loft, LoopParam};
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+/// The two loops to join, in the output frame.
+#[derive(Clone, Copy, Debug)]
+pub struct BandLoops<'a> {
+    /// The IOS margin loop, ordered (either direction).
+    pub upper: &'a [DVec3],
+    /// Per upper vertex: unit tangent of the crown surface, across the loop, pointing from the
+    /// margin into the crown.
+    pub upper_dir: &'a [DVec3],
+    /// The CBCT cut loop, ordered (either direction).
+    pub lower: &'a [DVec3],
+    /// Per lower vertex: unit tangent of the root surface, across the loop, pointing from the
+    /// root toward the crown (out of the root).
+    pub lower_dir: &'a [DVec3],
+}
+
+/// Where the band's interior points come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PointGeneration {
+    /// Ours: rings at heights graded from the margin's edge length to the cut's, points evenly
+    /// spaced on each ring, placed on the Hermite loft.
+    Rings,
+    /// Paper: Algorithm 1 recursive interpolation and voxel downsampling; the points keep their
+    /// generated positions.
+    Recursive(InterpOptions),
+}
+
+/// Options of the stitching.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StitchOptions {
+    /// Interior point generation.
+    pub points: PointGeneration,
+    /// Hermite tangent length as a fraction of the loop-to-loop distance (0: ruled band).
+    pub tangent_scale: f64,
+}
+
+impl Default for StitchOptions {
+    fn default() -> Self {
+        Self {
+            points: PointGeneration::Rings,
+            tangent_scale: 0.8,
+        }
+    }
+}
+
+/// A vertex of the band.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum BandVertex {
+    /// Index into [`BandLoops::upper`].
+    Upper(u32),
+    /// Index into [`BandLoops::lower`].
+    Lower(u32),
+    /// Index into [`Band::points`].
+    Interior(u32),
+}
+
+/// The band: new interior points and triangles over loop and interior vertices. Triangles are
+/// consistently oriented; [`Band::triangles`] may need flipping as a whole to match the crown.
+#[derive(Clone, Debug, Default)]
+pub struct Band {
+    /// Interior points (new vertices).
+    pub points: Vec<DVec3>,
+    /// Triangles.
+    pub triangles: Vec<[BandVertex; 3]>,
+}
+
+/// Builds the band between the two loops. Its boundary is exactly the two loops.
+pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -> Result<Band> {
+    let (nu, nl) = (loops.upper.len(), loops.lower.len());
+    if nu < 3 || nl < 3 || loops.upper_dir.len() != nu || loops.lower_dir.len() != nl {
+        return Err(Error::InvalidArgument(
+            "band loops need ≥ 3 vertices and one direction per vertex".into(),
+        ));
+    }
+    // Orient both loops counter-clockwise about the axis; remember the original indices.
+    let order = |pts: &[DVec3], what: &str| -> Result<Vec<u32>> {
+        let w = param::winding(frame, pts);
+        let n = pts.len() as u32;
+        if (w - 1.0).abs() < 0.5 {
+            Ok((0..n).collect())
+        } else if (w + 1.0).abs() < 0.5 {
+            Ok((0..n).rev().collect())
+        } else {
+            Err(Error::InvalidArgument(format!(
+                "{what} loop winds {w:.2} times around the tooth axis, expected once"
+            )))
+        }
+    };
+    let uo = order(loops.upper, "margin")?;
+    let lo = order(loops.lower, "cut")?;
+    let pick = |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
+    let upper = LoopParam::upper(pick(loops.upper, &uo), pick(loops.upper_dir, &uo))?;
+    let lower =
+        LoopParam::lower_aligned(pick(loops.lower, &lo), pick(loops.lower_dir, &lo), &upper, frame)?;
+    let loft = Loft::new(upper, lower, opts.tangent_scale);
+
+    let interior: Vec<ParamPoint> = match opts.points {
+        PointGeneration::Rings => rings(&loft),
+        PointGeneration::Recursive(io) => recursive(&loft, &io),
+    };
+    // Keep interior points strictly inside the annulus polygons.
+    let gap_u = (0..nu)
+        .map(|i| {
+            let next = if i + 1 < nu { loft.upper.phi[i + 1] } else { loft.upper.phi[0] + 1.0 };
+            next - loft.upper.phi[i]
+        })
+        .fold(0.0, f64::max);
+    let r_u = (std::f64::consts::TAU * loft.mean_height / loft.mean_length).exp();
+    let r_max = r_u * (std::f64::consts::PI * gap_u).cos() * (1.0 - 1e-6);
+    let r_min = 1.0 + 1e-6;
+
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> = ConstrainedDelaunayTriangulation::new();
+    let mut handle_to_vertex: Vec<Option<BandVertex>> = Vec::new();
+    let mut insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
+                      xy: [f64; 2],
+                      bv: BandVertex|
+     -> Result<Option<usize>> {
+        let h = cdt
+            .insert(Point2::new(xy[0], xy[1]))
+            .map_err(|e| Error::InvalidArgument(format!("band triangulation: {e:?}")))?;
+        let i = h.index();
+        if i < handle_to_vertex.len() {
+            return Ok(None);
+        }
+        handle_to_vertex.resize(i + 1, None);
+        handle_to_vertex[i] = Some(bv);
+        Ok(Some(i))
+    };
+    let mut up_h = Vec::with_capacity(nu);
+    for (k, &phi) in loft.upper.phi.iter().enumerate() {
+        let h = insert(&mut cdt, loft.plane(phi, 1.0), BandVertex::Upper(uo[k]))?
+            .ok_or_else(|| Error::InvalidArgument("margin loop vertices coincide in the band plane".into()))?;
+        up_h.push(h);
+    }
+    let mut lo_h = Vec::with_capacity(nl);
+    for (k, &phi) in loft.lower.phi.iter().enumerate() {
+        let h = insert(&mut cdt, loft.plane(phi, 0.0), BandVertex::Lower(lo[k]))?
+            .ok_or_else(|| Error::InvalidArgument("cut loop vertices coincide in the band plane".into()))?;
+        lo_h.push(h);
+    }
+    let handles: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
+    for ring in [&up_h, &lo_h] {
+        for i in 0..ring.len() {
+            let (a, b) = (handles[ring[i]], handles[ring[(i + 1) % ring.len()]]);
+            cdt.add_constraint(a, b);
+        }
+    }
+    let mut points = Vec::new();
+    for p in &interior {
+        let xy = loft.plane(p.phi, p.v);
+        let r = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
+        if !(r > r_min && r < r_max) || !p.pos.is_finite() {
+            continue;
+        }
+        if insert(&mut cdt, xy, BandVertex::Interior(points.len() as u32))?.is_some() {
+            points.push(p.pos);
+        }
+    }
+    // Every loop edge must have survived as a constraint edge.
+    let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
+    let mut seeds = Vec::new();
+    for (ring, outer) in [(&up_h, true), (&lo_h, false)] {
+        for i in 0..ring.len() {
+            let (a, b) = (vh[ring[i]], vh[ring[(i + 1) % ring.len()]]);
+            let e = cdt.get_edge_from_neighbors(a, b).ok_or_else(|| {
+                Error::InvalidArgument("band triangulation lost a loop edge".into())
+            })?;
+            // Band side: inside the outer (margin) polygon, outside the inner (cut) polygon.
+            let f = if outer { e.face() } else { e.rev().face() };
+            let f = f.as_inner().ok_or_else(|| {
+                Error::InvalidArgument("band triangulation: loop edge on the hull's outside".into())
+            })?;
+            seeds.push(f.fix());
+        }
+    }
+    // Flood the band region from the seeds without crossing constraint edges.
+    let nfaces = cdt.num_all_faces();
+    let mut in_band = vec![false; nfaces];
+    let mut stack = Vec::new();
+    for s in seeds {
+        if !in_band[s.index()] {
+            in_band[s.index()] = true;
+            stack.push(s);
+        }
+    }
+    while let Some(f) = stack.pop() {
+        for e in cdt.face(f).adjacent_edges() {
+            if e.is_constraint_edge() {
+                continue;
+            }
+            if let Some(g) = e.rev().face().as_inner() {
+                let gi = g.fix().index();
+                if !in_band[gi] {
+                    in_band[gi] = true;
+                    stack.push(g.fix());
+                }
+            } else {
+                return Err(Error::InvalidArgument(
+                    "band region leaks outside the margin loop".into(),
+                ));
+            }
+        }
+    }
+    let mut triangles = Vec::new();
+    for f in cdt.inner_faces() {
+        if !in_band[f.fix().index()] {
+            continue;
+        }
+        let vs = f.vertices();
+        let t = vs.map(|v| handle_to_vertex[v.fix().index()]);
+        match t {
+            [Some(a), Some(b), Some(c)] => triangles.push([a, b, c]),
+            _ => return Err(Error::InvalidArgument("band triangulation vertex lost".into())),
+        }
+    }
+    // An annulus triangulation has exactly nu + nl + 2·interior triangles.
+    let expected = nu + nl + 2 * points.len();
+    if triangles.len() != expected {
+        return Err(Error::InvalidArgument(format!(
+            "band has {} triangles, an annulus with these vertices has {expected}",
+            triangles.len()
+        )));
+    }
+    Ok(Band { points, triangles })
+}
+
+/// Ours: rings between the loops, spacing graded geometrically from the margin's mean edge
+/// length (v = 1) to the cut's (v = 0), alternate rings shifted by half a step.
+fn rings(loft: &Loft) -> Vec<ParamPoint> {
+    let e_u = loft.upper.length / loft.upper.pts.len() as f64;
+    let e_l = loft.lower.length / loft.lower.pts.len() as f64;
+    let h = loft.mean_height;
+    let row = 0.866; // equilateral row spacing
+    let n = if (e_u - e_l).abs() < 1e-9 {
+        (h / (row * e_u)).round()
+    } else {
+        (h / (row * (e_u - e_l)) * (e_u / e_l).ln()).round()
+    }
+    .max(1.0) as usize;
+    let mut out = Vec::new();
+    for k in 1..n {
+        let (e, v) = if (e_u - e_l).abs() < 1e-9 {
+            (e_u, 1.0 - k as f64 / n as f64)
+        } else {
+            let e = e_u * (e_l / e_u).powf(k as f64 / n as f64);
+            (e, (e - e_l) / (e_u - e_l))
+        };
+        let len = loft.lower.length + (loft.upper.length - loft.lower.length) * v;
+        let count = ((len / e).round() as usize).max(3);
+        let shift = if k % 2 == 1 { 0.5 } else { 0.0 };
+        for j in 0..count {
+            let phi = loft.upper.phi[0] + (j as f64 + shift) / count as f64;
+            out.push(ParamPoint {
+                pos: loft.point(phi, v),
+                phi,
+                v,
+            });
+        }
+    }
+    out
+}
+
+/// Paper: Algorithm 1 between the two loops, then voxel downsampling; points near a loop vertex
+/// (closer than half a voxel) are dropped so no sliver forms against the boundary.
+fn recursive(loft: &Loft, o: &InterpOptions) -> Vec<ParamPoint> {
+    let a: Vec<ParamPoint> = (0..loft.upper.pts.len())
+        .map(|i| ParamPoint {
+            pos: loft.upper.pts[i],
+            phi: loft.upper.phi[i],
+            v: 1.0,
+        })
+        .collect();
+    let b: Vec<ParamPoint> = (0..loft.lower.pts.len())
+        .map(|i| ParamPoint {
+            pos: loft.lower.pts[i],
+            phi: loft.lower.phi[i],
+            v: 0.0,
+        })
+        .collect();
+    let pts = interp::gen_inter_points(&a, &b, o.neighbours, o.per_segment, o.depth);
+    let pts = interp::voxel_downsample(&pts, o.voxel);
+    let loop_pts: Vec<[f64; 3]> = a.iter().chain(b.iter()).map(|p| p.pos.to_array()).collect();
+    let tree = kiddo::ImmutableKdTree::<f64, 3>::new_from_slice(&loop_pts).expect("kd-tree over loops");
+    let min_d2 = (0.5 * o.voxel).powi(2);
+    pts.into_iter()
+        .filter(|p| {
+            let r = tree
+                .query(&p.pos.to_array())
+                .nearest_one::<kiddo::SquaredEuclidean<f64>>()
+                .execute();
+            r.distance >= min_d2
+        })
+        .collect()
+}
