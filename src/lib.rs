@@ -11,15 +11,15 @@
 #![deny(unsafe_code)]
 
 pub mod arch;
+pub mod cut;
 pub mod error;
+pub mod fuse;
 pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod mesh_check;
-pub mod cut;
-pub mod stitch;
-pub mod fuse;
 pub mod phantom;
+pub mod stitch;
 
 #[allow(unsafe_code)]
 pub mod ffi;

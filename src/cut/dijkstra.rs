@@ -30,7 +30,10 @@ pub fn nearest_vertices(mesh: &TriMesh, targets: &[DVec3]) -> Vec<u32> {
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&pts).expect("kd-tree over vertices");
     let mut out: Vec<u32> = Vec::with_capacity(targets.len());
     for t in targets {
-        let r = tree.query(&t.to_array()).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let r = tree
+            .query(&t.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
         let v = r.item as u32;
         if out.last() != Some(&v) {
             out.push(v);

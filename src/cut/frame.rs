@@ -47,7 +47,9 @@ impl ToothFrame {
         let n = eig.eigenvectors.column(k);
         let mut axis = DVec3::new(n[0], n[1], n[2]).normalize_or_zero();
         if axis == DVec3::ZERO || !axis.is_finite() {
-            return Err(Error::InvalidArgument("margin loop is degenerate (no plane)".into()));
+            return Err(Error::InvalidArgument(
+                "margin loop is degenerate (no plane)".into(),
+            ));
         }
         if (crown_point - center).dot(axis) < 0.0 {
             axis = -axis;
@@ -114,7 +116,9 @@ impl MarginHeight {
         // Fill empty bins from the nearest filled ones (circularly).
         let filled: Vec<usize> = (0..BINS).filter(|&k| raw[k].is_finite()).collect();
         if filled.is_empty() {
-            return Self { bins: vec![0.0; BINS] };
+            return Self {
+                bins: vec![0.0; BINS],
+            };
         }
         let mut full = raw.clone();
         for k in 0..BINS {

@@ -117,7 +117,10 @@ pub fn cut_crown(
                 .collect()
         }
         CutMethod::Dijkstra => {
-            let targets: Vec<DVec3> = margin.iter().map(|&p| p - frame.axis * opts.offset).collect();
+            let targets: Vec<DVec3> = margin
+                .iter()
+                .map(|&p| p - frame.axis * opts.offset)
+                .collect();
             let anchors = dijkstra::nearest_vertices(cbct, &targets);
             if anchors.len() < 3 {
                 return Err(Error::InvalidArgument(
@@ -147,7 +150,10 @@ pub fn cut_crown(
     let root_mask = region::clean_root_region(cbct, &adj, rough, root_seed, crown_seed)?;
     let mut root = TriMesh::new(
         cbct.positions.clone(),
-        (0..nf).filter(|&f| root_mask[f]).map(|f| cbct.triangles[f]).collect(),
+        (0..nf)
+            .filter(|&f| root_mask[f])
+            .map(|f| cbct.triangles[f])
+            .collect(),
     );
     let removed_faces = nf - root.triangles.len();
     let map = root.compact();
@@ -168,7 +174,9 @@ pub fn cut_crown(
     let mut sorted = cut_loop.clone();
     sorted.sort_unstable();
     if sorted.windows(2).any(|w| w[0] == w[1]) || cut_loop.len() < 3 {
-        return Err(Error::InvalidArgument("crown cut loop is not simple".into()));
+        return Err(Error::InvalidArgument(
+            "crown cut loop is not simple".into(),
+        ));
     }
     Ok(RootCut {
         root,

@@ -69,7 +69,8 @@ pub fn clean_root_region(
     for _round in 0..200 {
         if !root[root_seed as usize] || root[crown_seed as usize] {
             return Err(Error::InvalidArgument(
-                "crown cut leaves no root or no crown (margin does not cross the CBCT tooth)".into(),
+                "crown cut leaves no root or no crown (margin does not cross the CBCT tooth)"
+                    .into(),
             ));
         }
         root = flood(adj, &root, root_seed, |_, _| false);

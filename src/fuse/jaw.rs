@@ -44,7 +44,9 @@ pub fn ios_crowns(ios: &LabeledMesh) -> Result<BTreeMap<u8, TriMesh>> {
     } else if let Some(l) = &ios.face_labels {
         split_by_face_labels(&ios.mesh, l)?
     } else {
-        return Err(Error::MissingData("the IOS mesh has no tooth labels".into()));
+        return Err(Error::MissingData(
+            "the IOS mesh has no tooth labels".into(),
+        ));
     };
     Ok(parts
         .into_iter()
@@ -83,7 +85,11 @@ pub fn fuse_jaw(
             Err(e) => jaw.failed.push((fdi, e)),
         }
     }
-    jaw.cbct_only = cbct.keys().copied().filter(|k| !crowns.contains_key(k)).collect();
+    jaw.cbct_only = cbct
+        .keys()
+        .copied()
+        .filter(|k| !crowns.contains_key(k))
+        .collect();
     let mut parts: BTreeMap<u8, (TriMesh, Vec<u8>)> = jaw
         .teeth
         .iter()
@@ -92,7 +98,10 @@ pub fn fuse_jaw(
     if opts.pass_through_cbct_only {
         for &fdi in &jaw.cbct_only {
             let m = cbct[&fdi].transformed(
-                &transforms.get(&fdi).map(|t| t.cbct_to_output).unwrap_or_default(),
+                &transforms
+                    .get(&fdi)
+                    .map(|t| t.cbct_to_output)
+                    .unwrap_or_default(),
             );
             let n = m.positions.len();
             parts.insert(fdi, (m, vec![VertexSource::Cbct as u8; n]));
@@ -101,7 +110,8 @@ pub fn fuse_jaw(
     }
     for (fdi, (m, s)) in parts {
         jaw.mesh.append(&m);
-        jaw.labels.extend(std::iter::repeat_n(fdi as i32, m.positions.len()));
+        jaw.labels
+            .extend(std::iter::repeat_n(fdi as i32, m.positions.len()));
         jaw.source.extend(s);
     }
     Ok(jaw)

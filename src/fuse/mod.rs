@@ -49,7 +49,9 @@ impl Preset {
 
     /// Parses a command-line name.
     pub fn from_name(s: &str) -> Option<Preset> {
-        [Preset::Paper, Preset::Default].into_iter().find(|p| p.name() == s)
+        [Preset::Paper, Preset::Default]
+            .into_iter()
+            .find(|p| p.name() == s)
     }
 }
 

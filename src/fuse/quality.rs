@@ -59,12 +59,17 @@ impl ToothQuality {
 
 /// Angles (degrees) of a triangle.
 pub fn triangle_angles(a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> [f64; 3] {
-    let ang = |p: glam::DVec3, q: glam::DVec3, r: glam::DVec3| (q - p).angle_between(r - p).to_degrees();
+    let ang =
+        |p: glam::DVec3, q: glam::DVec3, r: glam::DVec3| (q - p).angle_between(r - p).to_degrees();
     [ang(a, b, c), ang(b, c, a), ang(c, a, b)]
 }
 
 /// Measures `mesh`; `band` lists the band's face indices.
-pub fn measure(mesh: &TriMesh, band: std::ops::Range<usize>, check_self_intersections: bool) -> ToothQuality {
+pub fn measure(
+    mesh: &TriMesh,
+    band: std::ops::Range<usize>,
+    check_self_intersections: bool,
+) -> ToothQuality {
     let r = mesh.topology_report();
     let mut q = ToothQuality {
         closed: r.boundary_edges == 0,
@@ -75,7 +80,8 @@ pub fn measure(mesh: &TriMesh, band: std::ops::Range<usize>, check_self_intersec
         components: r.components,
         volume: mesh.signed_volume(),
         degenerate_faces: mesh_check::degenerate_faces(mesh),
-        self_intersections: check_self_intersections.then(|| mesh_check::self_intersections(mesh).len()),
+        self_intersections: check_self_intersections
+            .then(|| mesh_check::self_intersections(mesh).len()),
         band_min_angle_deg: 180.0,
         band_edge_min: f64::INFINITY,
         band_faces: band.len(),
@@ -93,6 +99,10 @@ pub fn measure(mesh: &TriMesh, band: std::ops::Range<usize>, check_self_intersec
             sum += l;
         }
     }
-    q.band_edge_mean = if band.is_empty() { 0.0 } else { sum / (3 * band.len()) as f64 };
+    q.band_edge_mean = if band.is_empty() {
+        0.0
+    } else {
+        sum / (3 * band.len()) as f64
+    };
     q
 }

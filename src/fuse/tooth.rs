@@ -61,7 +61,8 @@ pub fn fuse_tooth(
     cbct_to_output: &Rigid,
     opts: &FuseOptions,
 ) -> Result<FusedTooth> {
-    fuse_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts).map_err(|e| e.in_tooth(fdi))
+    fuse_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts)
+        .map_err(|e| e.in_tooth(fdi))
 }
 
 fn fuse_inner(
@@ -83,11 +84,19 @@ fn fuse_inner(
     // Margin = the longest boundary loop; the others are holes to fill.
     let mut loops = boundary_loops(&crown);
     if loops.is_empty() {
-        return Err(Error::InvalidArgument("IOS crown has no boundary (no gingival margin)".into()));
+        return Err(Error::InvalidArgument(
+            "IOS crown has no boundary (no gingival margin)".into(),
+        ));
     }
     let lens: Vec<f64> = loops
         .iter()
-        .map(|l| polyline_length(&l.iter().map(|&v| crown.positions[v as usize]).collect::<Vec<_>>()))
+        .map(|l| {
+            polyline_length(
+                &l.iter()
+                    .map(|&v| crown.positions[v as usize])
+                    .collect::<Vec<_>>(),
+            )
+        })
         .collect();
     let mi = (0..loops.len())
         .max_by(|&a, &b| lens[a].total_cmp(&lens[b]).then(b.cmp(&a)))
@@ -95,7 +104,10 @@ fn fuse_inner(
     let mut margin = loops.swap_remove(mi);
     let holes = loops;
     let crown_centroid = crate::geom::centroid(&crown.positions).unwrap_or(DVec3::ZERO);
-    let margin_pts: Vec<DVec3> = margin.iter().map(|&v| crown.positions[v as usize]).collect();
+    let margin_pts: Vec<DVec3> = margin
+        .iter()
+        .map(|&v| crown.positions[v as usize])
+        .collect();
     let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
     // The crown lies to the left of its margin seen from outside: counter-clockwise about the
     // axis. If not, the crown is inward-oriented: flip it (positions untouched).
@@ -116,17 +128,28 @@ fn fuse_inner(
         source.push(VertexSource::Band as u8);
         for i in 0..h.len() {
             let (a, b) = (h[i], h[(i + 1) % h.len()]);
-            let hole = if opts_flipped(&warnings) { [a, b, ci] } else { [b, a, ci] };
+            let hole = if opts_flipped(&warnings) {
+                [a, b, ci]
+            } else {
+                [b, a, ci]
+            };
             mesh.triangles.push(hole);
         }
     }
     if !holes.is_empty() {
-        warnings.push(format!("{} small hole(s) in the IOS crown filled", holes.len()));
+        warnings.push(format!(
+            "{} small hole(s) in the IOS crown filled",
+            holes.len()
+        ));
     }
     let crown_dirs = loop_dirs(&mesh, &margin, frame.axis);
     // Crown removal.
     let rc = cut::cut_crown(&root_in, &margin_pts_of(&mesh, &margin), &frame, &opts.cut)?;
-    let lower_pts: Vec<DVec3> = rc.cut_loop.iter().map(|&v| rc.root.positions[v as usize]).collect();
+    let lower_pts: Vec<DVec3> = rc
+        .cut_loop
+        .iter()
+        .map(|&v| rc.root.positions[v as usize])
+        .collect();
     let lower_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
     let upper_pts = margin_pts_of(&mesh, &margin);
     let band = stitch::build_band(
@@ -142,10 +165,16 @@ fn fuse_inner(
     // Assemble: band interior, then root.
     let band_off = mesh.positions.len() as u32;
     mesh.positions.extend_from_slice(&band.points);
-    source.extend(std::iter::repeat_n(VertexSource::Band as u8, band.points.len()));
+    source.extend(std::iter::repeat_n(
+        VertexSource::Band as u8,
+        band.points.len(),
+    ));
     let root_off = mesh.positions.len() as u32;
     mesh.positions.extend_from_slice(&rc.root.positions);
-    source.extend(std::iter::repeat_n(VertexSource::Cbct as u8, rc.root.positions.len()));
+    source.extend(std::iter::repeat_n(
+        VertexSource::Cbct as u8,
+        rc.root.positions.len(),
+    ));
     let map = |b: BandVertex| match b {
         BandVertex::Upper(i) => margin[i as usize],
         BandVertex::Lower(i) => rc.cut_loop[i as usize] + root_off,
@@ -157,7 +186,8 @@ fn fuse_inner(
     let (m0, m1) = (margin[0], margin[1 % margin.len()]);
     debug_assert!(crown_topo.faces_of_directed(m0, m1).next().is_some());
     let band_has = |a: u32, b: u32, tris: &[[u32; 3]]| {
-        tris.iter().any(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))
+        tris.iter()
+            .any(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))
     };
     if band_has(m0, m1, &band_tris) {
         for t in &mut band_tris {

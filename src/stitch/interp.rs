@@ -45,7 +45,12 @@ impl Default for InterpOptions {
 
 /// Algorithm 1, INTERPOLATEPOINTS (lines 16–24): for each point of `a`, its N nearest points of
 /// `b` (k-d tree) and K points evenly inside each connecting segment.
-pub fn interpolate_points(a: &[ParamPoint], b: &[ParamPoint], n: usize, k: usize) -> Vec<ParamPoint> {
+pub fn interpolate_points(
+    a: &[ParamPoint],
+    b: &[ParamPoint],
+    n: usize,
+    k: usize,
+) -> Vec<ParamPoint> {
     if a.is_empty() || b.is_empty() || n == 0 || k == 0 {
         return Vec::new();
     }
@@ -76,7 +81,13 @@ pub fn interpolate_points(a: &[ParamPoint], b: &[ParamPoint], n: usize, k: usize
 
 /// Algorithm 1, GENINTERPOINTS (lines 9–15): midpoints between `a` and `b`, then recursively
 /// between `a` and the midpoints and between the midpoints and `b`, `m` levels deep.
-pub fn gen_inter_points(a: &[ParamPoint], b: &[ParamPoint], n: usize, k: usize, m: u32) -> Vec<ParamPoint> {
+pub fn gen_inter_points(
+    a: &[ParamPoint],
+    b: &[ParamPoint],
+    n: usize,
+    k: usize,
+    m: u32,
+) -> Vec<ParamPoint> {
     if m == 0 {
         return Vec::new();
     }
@@ -141,7 +152,10 @@ mod tests {
         assert!(gen_inter_points(&a, &b, 2, 3, 0).is_empty());
         let pts = gen_inter_points(&a, &b, 1, 1, 1);
         // Nearest of each A point is the B point right below: midpoints at z = 0.5, v = 0.5.
-        assert!(pts.iter().all(|p| (p.pos.z - 0.5).abs() < 1e-12 && (p.v - 0.5).abs() < 1e-12));
+        assert!(
+            pts.iter()
+                .all(|p| (p.pos.z - 0.5).abs() < 1e-12 && (p.v - 0.5).abs() < 1e-12)
+        );
     }
 
     #[test]

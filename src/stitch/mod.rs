@@ -109,27 +109,54 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
     let uo = order(loops.upper, "margin")?;
     let lo = order(loops.lower, "cut")?;
     let pick = |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
-    let upper = LoopParam::upper(pick(loops.upper, &uo), pick(loops.upper_dir, &uo))?;
-    let lower =
-        LoopParam::lower_aligned(pick(loops.lower, &lo), pick(loops.lower_dir, &lo), &upper, frame)?;
+    let (up_pts, lo_pts) = (pick(loops.upper, &uo), pick(loops.lower, &lo));
+    // The loft (where our interior points live) runs between smoothed copies of the loops, so the
+    // loops' vertex-level jaggedness does not leak into the interior.
+    let upper = LoopParam::upper(
+        smooth(&up_pts, 8),
+        smooth_dirs(&pick(loops.upper_dir, &uo), 8),
+    )?;
+    let lower = LoopParam::lower_aligned(
+        smooth(&lo_pts, 4),
+        smooth_dirs(&pick(loops.lower_dir, &lo), 4),
+        &upper,
+        frame,
+    )?;
     let loft = Loft::new(upper, lower, opts.tangent_scale);
-
-    let interior: Vec<ParamPoint> = match opts.points {
-        PointGeneration::Rings => rings(&loft),
-        PointGeneration::Recursive(io) => recursive(&loft, &io),
+    let (interior, spacing): (Vec<ParamPoint>, Box<dyn Fn(f64) -> f64>) = match opts.points {
+        PointGeneration::Rings => {
+            let (e_u, e_l) = (mean_edge(&up_pts), mean_edge(&lo_pts));
+            (
+                rings(&loft, e_u, e_l),
+                Box::new(move |v: f64| e_l + (e_u - e_l) * v),
+            )
+        }
+        PointGeneration::Recursive(io) => {
+            let vox = io.voxel;
+            (
+                recursive(&loft, &up_pts, &lo_pts, &io),
+                Box::new(move |_| vox),
+            )
+        }
     };
-    // Keep interior points strictly inside the annulus polygons.
-    let gap_u = (0..nu)
-        .map(|i| {
-            let next = if i + 1 < nu { loft.upper.phi[i + 1] } else { loft.upper.phi[0] + 1.0 };
-            next - loft.upper.phi[i]
-        })
-        .fold(0.0, f64::max);
-    let r_u = (std::f64::consts::TAU * loft.mean_height / loft.mean_length).exp();
-    let r_max = r_u * (std::f64::consts::PI * gap_u).cos() * (1.0 - 1e-6);
-    let r_min = 1.0 + 1e-6;
+    // Every band vertex is placed in the plane by its own 3D position: angle about the axis,
+    // and log of the height scaled by the mean radius (conformal for a cylinder), so planar
+    // triangles that do not overlap are 3D triangles that do not overlap on a radial-graph band.
+    let r_mean = 0.5 * (loft.upper.length + loft.lower.length) / std::f64::consts::TAU;
+    let h0 = lo_pts
+        .iter()
+        .map(|&p| frame.height(p))
+        .fold(f64::INFINITY, f64::min);
+    let plane = |p: DVec3| -> [f64; 2] {
+        let r = ((frame.height(p) - h0) / r_mean).exp();
+        let a = frame.angle(p);
+        [r * a.cos(), r * a.sin()]
+    };
+    let up_xy: Vec<[f64; 2]> = up_pts.iter().map(|&p| plane(p)).collect();
+    let lo_xy: Vec<[f64; 2]> = lo_pts.iter().map(|&p| plane(p)).collect();
 
-    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> = ConstrainedDelaunayTriangulation::new();
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::new();
     let mut handle_to_vertex: Vec<Option<BandVertex>> = Vec::new();
     let mut insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
                       xy: [f64; 2],
@@ -147,29 +174,44 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         Ok(Some(i))
     };
     let mut up_h = Vec::with_capacity(nu);
-    for (k, &phi) in loft.upper.phi.iter().enumerate() {
-        let h = insert(&mut cdt, loft.plane(phi, 1.0), BandVertex::Upper(uo[k]))?
-            .ok_or_else(|| Error::InvalidArgument("margin loop vertices coincide in the band plane".into()))?;
+    for (k, xy) in up_xy.iter().enumerate() {
+        let h = insert(&mut cdt, *xy, BandVertex::Upper(uo[k]))?.ok_or_else(|| {
+            Error::InvalidArgument("margin loop vertices coincide in the band plane".into())
+        })?;
         up_h.push(h);
     }
     let mut lo_h = Vec::with_capacity(nl);
-    for (k, &phi) in loft.lower.phi.iter().enumerate() {
-        let h = insert(&mut cdt, loft.plane(phi, 0.0), BandVertex::Lower(lo[k]))?
-            .ok_or_else(|| Error::InvalidArgument("cut loop vertices coincide in the band plane".into()))?;
+    for (k, xy) in lo_xy.iter().enumerate() {
+        let h = insert(&mut cdt, *xy, BandVertex::Lower(lo[k]))?.ok_or_else(|| {
+            Error::InvalidArgument("cut loop vertices coincide in the band plane".into())
+        })?;
         lo_h.push(h);
     }
     let handles: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
     for ring in [&up_h, &lo_h] {
         for i in 0..ring.len() {
             let (a, b) = (handles[ring[i]], handles[ring[(i + 1) % ring.len()]]);
+            if !cdt.can_add_constraint(a, b) {
+                return Err(Error::InvalidArgument(
+                    "margin and cut loops cross each other (or themselves) around the tooth axis"
+                        .into(),
+                ));
+            }
             cdt.add_constraint(a, b);
         }
     }
     let mut points = Vec::new();
     for p in &interior {
-        let xy = loft.plane(p.phi, p.v);
-        let r = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
-        if !(r > r_min && r < r_max) || !p.pos.is_finite() {
+        if !p.pos.is_finite() {
+            continue;
+        }
+        let xy = plane(p.pos);
+        let rho = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
+        // Strictly inside the annulus, and not closer to a loop than a fraction of the spacing.
+        let min_d = 0.4 * spacing(p.v) * rho / r_mean;
+        let (in_u, d_u) = polygon_side(&up_xy, xy);
+        let (in_l, d_l) = polygon_side(&lo_xy, xy);
+        if !in_u || in_l || d_u < min_d || d_l < min_d {
             continue;
         }
         if insert(&mut cdt, xy, BandVertex::Interior(points.len() as u32))?.is_some() {
@@ -230,7 +272,11 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         let t = vs.map(|v| handle_to_vertex[v.fix().index()]);
         match t {
             [Some(a), Some(b), Some(c)] => triangles.push([a, b, c]),
-            _ => return Err(Error::InvalidArgument("band triangulation vertex lost".into())),
+            _ => {
+                return Err(Error::InvalidArgument(
+                    "band triangulation vertex lost".into(),
+                ));
+            }
         }
     }
     // An annulus triangulation has exactly nu + nl + 2·interior triangles.
@@ -246,9 +292,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
 
 /// Ours: rings between the loops, spacing graded geometrically from the margin's mean edge
 /// length (v = 1) to the cut's (v = 0), alternate rings shifted by half a step.
-fn rings(loft: &Loft) -> Vec<ParamPoint> {
-    let e_u = loft.upper.length / loft.upper.pts.len() as f64;
-    let e_l = loft.lower.length / loft.lower.pts.len() as f64;
+fn rings(loft: &Loft, e_u: f64, e_l: f64) -> Vec<ParamPoint> {
     let h = loft.mean_height;
     let row = 0.866; // equilateral row spacing
     let n = if (e_u - e_l).abs() < 1e-9 {
@@ -282,17 +326,17 @@ fn rings(loft: &Loft) -> Vec<ParamPoint> {
 
 /// Paper: Algorithm 1 between the two loops, then voxel downsampling; points near a loop vertex
 /// (closer than half a voxel) are dropped so no sliver forms against the boundary.
-fn recursive(loft: &Loft, o: &InterpOptions) -> Vec<ParamPoint> {
-    let a: Vec<ParamPoint> = (0..loft.upper.pts.len())
+fn recursive(loft: &Loft, up: &[DVec3], lo: &[DVec3], o: &InterpOptions) -> Vec<ParamPoint> {
+    let a: Vec<ParamPoint> = (0..up.len())
         .map(|i| ParamPoint {
-            pos: loft.upper.pts[i],
+            pos: up[i],
             phi: loft.upper.phi[i],
             v: 1.0,
         })
         .collect();
-    let b: Vec<ParamPoint> = (0..loft.lower.pts.len())
+    let b: Vec<ParamPoint> = (0..lo.len())
         .map(|i| ParamPoint {
-            pos: loft.lower.pts[i],
+            pos: lo[i],
             phi: loft.lower.phi[i],
             v: 0.0,
         })
@@ -300,7 +344,8 @@ fn recursive(loft: &Loft, o: &InterpOptions) -> Vec<ParamPoint> {
     let pts = interp::gen_inter_points(&a, &b, o.neighbours, o.per_segment, o.depth);
     let pts = interp::voxel_downsample(&pts, o.voxel);
     let loop_pts: Vec<[f64; 3]> = a.iter().chain(b.iter()).map(|p| p.pos.to_array()).collect();
-    let tree = kiddo::ImmutableKdTree::<f64, 3>::new_from_slice(&loop_pts).expect("kd-tree over loops");
+    let tree =
+        kiddo::ImmutableKdTree::<f64, 3>::new_from_slice(&loop_pts).expect("kd-tree over loops");
     let min_d2 = (0.5 * o.voxel).powi(2);
     pts.into_iter()
         .filter(|p| {
@@ -311,4 +356,62 @@ fn recursive(loft: &Loft, o: &InterpOptions) -> Vec<ParamPoint> {
             r.distance >= min_d2
         })
         .collect()
+}
+
+/// Mean edge length of a closed polyline.
+fn mean_edge(p: &[DVec3]) -> f64 {
+    (0..p.len())
+        .map(|i| (p[(i + 1) % p.len()] - p[i]).length())
+        .sum::<f64>()
+        / p.len() as f64
+}
+
+/// `iters` passes of (1, 2, 1)/4 smoothing of a closed polyline.
+fn smooth(p: &[DVec3], iters: usize) -> Vec<DVec3> {
+    let n = p.len();
+    let mut cur = p.to_vec();
+    for _ in 0..iters {
+        cur = (0..n)
+            .map(|i| (cur[(i + n - 1) % n] + 2.0 * cur[i] + cur[(i + 1) % n]) * 0.25)
+            .collect();
+    }
+    cur
+}
+
+fn smooth_dirs(d: &[DVec3], iters: usize) -> Vec<DVec3> {
+    smooth(d, iters)
+        .into_iter()
+        .zip(d)
+        .map(|(s, o)| {
+            let u = s.normalize_or_zero();
+            if u == DVec3::ZERO { *o } else { u }
+        })
+        .collect()
+}
+
+/// Whether `q` is inside the closed polygon `poly` (even-odd), and its distance to the polygon.
+fn polygon_side(poly: &[[f64; 2]], q: [f64; 2]) -> (bool, f64) {
+    let n = poly.len();
+    let mut inside = false;
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        if (a[1] > q[1]) != (b[1] > q[1]) {
+            let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if q[0] < x {
+                inside = !inside;
+            }
+        }
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let l2 = ex * ex + ey * ey;
+        let t = if l2 > 0.0 {
+            (((q[0] - a[0]) * ex + (q[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (dx, dy) = (a[0] + t * ex - q[0], a[1] + t * ey - q[1]);
+        best = best.min((dx * dx + dy * dy).sqrt());
+    }
+    (inside, best)
 }

@@ -65,7 +65,9 @@ impl LoopParam {
         }
         let phi: Vec<f64> = c.iter().map(|s| s / length).collect();
         if phi.windows(2).any(|w| w[1] <= w[0]) {
-            return Err(Error::InvalidArgument("margin loop repeats a position".into()));
+            return Err(Error::InvalidArgument(
+                "margin loop repeats a position".into(),
+            ));
         }
         Ok(Self {
             pts,
@@ -101,7 +103,9 @@ impl LoopParam {
         let phi_at = |a: f64| {
             let a0 = table[0].0;
             let x = a0 + (a - a0).rem_euclid(std::f64::consts::TAU);
-            let k = table.partition_point(|&(t, _)| t <= x).clamp(1, table.len() - 1);
+            let k = table
+                .partition_point(|&(t, _)| t <= x)
+                .clamp(1, table.len() - 1);
             let (t0, p0) = table[k - 1];
             let (t1, p1) = table[k];
             if t1 > t0 {
@@ -145,7 +149,9 @@ impl LoopParam {
                 });
             }
             if w >= n {
-                return Err(Error::InvalidArgument("cut loop cannot be parametrised".into()));
+                return Err(Error::InvalidArgument(
+                    "cut loop cannot be parametrised".into(),
+                ));
             }
             w *= 2;
         }
@@ -162,7 +168,11 @@ impl LoopParam {
         } else {
             (k - 1, k, self.phi[k - 1], self.phi[k])
         };
-        let t = if b > a { ((x - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
+        let t = if b > a {
+            ((x - a) / (b - a)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         (
             self.pts[i].lerp(self.pts[j], t),
             self.dirs[i].lerp(self.dirs[j], t),
