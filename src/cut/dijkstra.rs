@@ -34,7 +34,7 @@ pub fn nearest_vertices(mesh: &TriMesh, targets: &[DVec3]) -> Vec<u32> {
             .query(&t.to_array())
             .nearest_one::<SquaredEuclidean<f64>>()
             .execute();
-        let v = r.item as u32;
+        let v = r.item;
         if out.last() != Some(&v) {
             out.push(v);
         }

@@ -44,8 +44,7 @@ pub fn flood(
     let mut stack = vec![seed];
     seen[seed as usize] = true;
     while let Some(f) = stack.pop() {
-        for k in 0..3 {
-            let g = adj[f as usize][k];
+        for (k, &g) in adj[f as usize].iter().enumerate() {
             if !seen[g as usize] && inside[g as usize] && !blocked(f as usize, k) {
                 seen[g as usize] = true;
                 stack.push(g);
@@ -113,12 +112,12 @@ pub fn clean_root_region(
         }
         let pinched: Vec<bool> = count.iter().map(|&c| c > 2).collect();
         if pinched.iter().any(|&p| p) {
-            for f in 0..nf {
-                if root[f]
+            for (f, r) in root.iter_mut().enumerate() {
+                if *r
                     && f as u32 != root_seed
                     && mesh.triangles[f].iter().any(|&v| pinched[v as usize])
                 {
-                    root[f] = false;
+                    *r = false;
                 }
             }
             changed = true;

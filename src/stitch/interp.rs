@@ -99,13 +99,16 @@ pub fn gen_inter_points(
     out
 }
 
+/// Per-voxel sums: position, cos φ, sin φ, v, count.
+type Acc = (DVec3, f64, f64, f64, usize);
+
 /// Algorithm 1, DOWNSAMPLE (line 6): one point per occupied voxel of edge `voxel`, the mean of
 /// the points in it (positions, parameters). Output sorted by voxel index (deterministic).
 pub fn voxel_downsample(points: &[ParamPoint], voxel: f64) -> Vec<ParamPoint> {
-    if !(voxel > 0.0) {
+    if voxel.is_nan() || voxel <= 0.0 {
         return points.to_vec();
     }
-    let mut cells: BTreeMap<(i64, i64, i64), (DVec3, f64, f64, f64, usize)> = BTreeMap::new();
+    let mut cells: BTreeMap<(i64, i64, i64), Acc> = BTreeMap::new();
     for p in points {
         let q = (p.pos / voxel).floor();
         let key = (q.x as i64, q.y as i64, q.z as i64);

@@ -60,7 +60,7 @@ impl LoopParam {
     /// The upper (IOS margin) loop: `φ` is its normalised arc length from vertex 0.
     pub fn upper(pts: Vec<DVec3>, dirs: Vec<DVec3>) -> Result<LoopParam> {
         let (c, length) = cumulative_length(&pts);
-        if !(length > 0.0) {
+        if length.is_nan() || length <= 0.0 {
             return Err(Error::InvalidArgument("margin loop has zero length".into()));
         }
         let phi: Vec<f64> = c.iter().map(|s| s / length).collect();
@@ -88,7 +88,7 @@ impl LoopParam {
     ) -> Result<LoopParam> {
         let n = pts.len();
         let (c, length) = cumulative_length(&pts);
-        if !(length > 0.0) || n < 3 {
+        if length.is_nan() || length <= 0.0 || n < 3 {
             return Err(Error::InvalidArgument("cut loop is degenerate".into()));
         }
         // Upper: monotone table angle → φ.
