@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod mesh_check;
 pub mod phantom;
 pub mod stitch;
+pub mod units;
 
 #[allow(unsafe_code)]
 pub mod ffi;

@@ -1,2 +1,45 @@
-//! `toothfuse` command-line tool.
-fn main() {}
+//! `toothfuse`: the command-line tool. Subcommands: `demo`, `info`, `render` (more with later
+//! stages). Errors print one line and exit non-zero; never a panic backtrace.
+
+mod demo;
+mod info;
+mod render;
+mod render_cmd;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Fuse intraoral-scan crowns with CBCT roots into one watertight mesh per tooth.
+#[derive(Parser)]
+#[command(name = "toothfuse", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Write a synthetic jaw (IOS jaw mesh, CBCT teeth, ground truth) to a folder.
+    Demo(demo::DemoArgs),
+    /// Print vertices, faces, labels, boundary loops and closed/manifold facts of a mesh file.
+    Info(info::InfoArgs),
+    /// Render a picture of the synthetic jaw (IOS crowns over CBCT teeth) to a PNG.
+    Render(render_cmd::RenderArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(a) => demo::run(&a),
+        Command::Info(a) => info::run(&a),
+        Command::Render(a) => render_cmd::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+            eprintln!("toothfuse: error: {}", chain.join(": "));
+            ExitCode::FAILURE
+        }
+    }
+}

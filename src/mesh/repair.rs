@@ -1,0 +1,484 @@
+//! Repair of real-world open surfaces (IOS crowns): real scans are decimated and segmented by
+//! other software, so a crown cut out by its labels may carry duplicate or degenerate faces,
+//! edges shared by three or more faces, flipped faces, bow-tie vertices, stray islands and small
+//! holes. [`repair_open_surface`] turns such a patch into one consistently oriented, manifold
+//! disk whose longest boundary loop is the margin, and reports everything it changed.
+//! Every input vertex that is still used keeps its exact position; split bow-tie vertices are
+//! duplicated, never moved.
+
+use super::TriMesh;
+use super::topology::{boundary_loops, connected_components};
+use super::validate::non_manifold_vertices;
+use glam::DVec3;
+
+/// Options of [`repair_open_surface`].
+#[derive(Clone, Copy, Debug)]
+pub struct RepairOptions {
+    /// Fill every boundary loop except the longest (the margin) whose perimeter is at most this
+    /// fraction of the longest loop's perimeter. 0 fills nothing.
+    pub max_hole_fraction: f64,
+}
+
+impl Default for RepairOptions {
+    fn default() -> Self {
+        Self {
+            max_hole_fraction: 0.5,
+        }
+    }
+}
+
+/// What [`repair_open_surface`] changed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RepairReport {
+    /// Faces dropped for repeating a vertex or having zero area.
+    pub degenerate_faces: usize,
+    /// Faces dropped as duplicates of an earlier face.
+    pub duplicate_faces: usize,
+    /// Faces dropped because an edge already had two faces.
+    pub non_manifold_faces: usize,
+    /// Faces flipped to agree with their neighbours.
+    pub flipped_faces: usize,
+    /// Faces dropped with components other than the largest.
+    pub island_faces: usize,
+    /// Vertices duplicated to split bow-ties.
+    pub split_vertices: usize,
+    /// Holes filled (loops other than the margin).
+    pub filled_holes: usize,
+    /// Vertices added as hole centres.
+    pub added_vertices: usize,
+}
+
+impl RepairReport {
+    /// True when nothing had to change.
+    pub fn is_clean(&self) -> bool {
+        *self == RepairReport::default()
+    }
+}
+
+/// Repairs an open surface patch (see the module doc). Returns the repaired mesh, for each of
+/// its vertices the input vertex it comes from (`u32::MAX` for added hole centres), and a report.
+pub fn repair_open_surface(
+    mesh: &TriMesh,
+    opts: &RepairOptions,
+) -> (TriMesh, Vec<u32>, RepairReport) {
+    let mut rep = RepairReport::default();
+    let n = mesh.positions.len();
+    // 1. Degenerate and duplicate faces.
+    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(mesh.triangles.len());
+    let mut seen: Vec<[u32; 3]> = Vec::new();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let bad_index = t.iter().any(|&v| v as usize >= n);
+        if bad_index
+            || t[0] == t[1]
+            || t[1] == t[2]
+            || t[0] == t[2]
+            || mesh.face_cross(f) == DVec3::ZERO
+        {
+            rep.degenerate_faces += 1;
+            continue;
+        }
+        let mut k = *t;
+        k.sort_unstable();
+        seen.push(k);
+        faces.push(*t);
+    }
+    let mut order: Vec<usize> = (0..faces.len()).collect();
+    order.sort_by_key(|&i| (seen[i], i));
+    let mut dup = vec![false; faces.len()];
+    for w in order.windows(2) {
+        if seen[w[0]] == seen[w[1]] {
+            dup[w[1]] = true;
+        }
+    }
+    rep.duplicate_faces = dup.iter().filter(|d| **d).count();
+    let faces: Vec<[u32; 3]> = faces
+        .into_iter()
+        .zip(dup)
+        .filter_map(|(t, d)| (!d).then_some(t))
+        .collect();
+    // 2. At most two faces per undirected edge (greedy in face order).
+    let mut edge_use: Vec<((u32, u32), u8)> = Vec::new();
+    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
+    {
+        let mut keys: Vec<(u32, u32)> = faces
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        edge_use.extend(keys.into_iter().map(|k| (k, 0u8)));
+        let idx = |e: (u32, u32), eu: &[((u32, u32), u8)]| {
+            eu.binary_search_by_key(&e, |x| x.0).expect("edge listed")
+        };
+        for t in &faces {
+            let es: Vec<usize> = (0..3)
+                .map(|k| {
+                    idx(
+                        (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])),
+                        &edge_use,
+                    )
+                })
+                .collect();
+            if es.iter().any(|&e| edge_use[e].1 >= 2) {
+                rep.non_manifold_faces += 1;
+                continue;
+            }
+            for e in es {
+                edge_use[e].1 += 1;
+            }
+            kept.push(*t);
+        }
+    }
+    let mut m = TriMesh::new(mesh.positions.clone(), kept);
+    // 3. Largest component only.
+    let (ids, count) = connected_components(&m);
+    if count > 1 {
+        let mut sizes = vec![0usize; count];
+        for &c in &ids {
+            sizes[c as usize] += 1;
+        }
+        let best = (0..count)
+            .max_by_key(|&c| (sizes[c], std::cmp::Reverse(c)))
+            .unwrap_or(0) as u32;
+        let before = m.triangles.len();
+        m.triangles = m
+            .triangles
+            .iter()
+            .zip(&ids)
+            .filter_map(|(t, &c)| (c == best).then_some(*t))
+            .collect();
+        rep.island_faces = before - m.triangles.len();
+    }
+    // 4. Consistent orientation by breadth-first propagation, then majority by area.
+    rep.flipped_faces = orient_consistently(&mut m);
+    // 5. Split bow-tie vertices.
+    let mut source: Vec<u32> = (0..n as u32).collect();
+    rep.split_vertices = split_bow_ties(&mut m, &mut source);
+    // 6. Fill small holes (every loop but the longest, up to the size limit).
+    if opts.max_hole_fraction > 0.0 {
+        let loops = boundary_loops(&m);
+        let perims: Vec<f64> = loops
+            .iter()
+            .map(|l| {
+                (0..l.len())
+                    .map(|i| {
+                        (m.positions[l[i] as usize] - m.positions[l[(i + 1) % l.len()] as usize])
+                            .length()
+                    })
+                    .sum()
+            })
+            .collect();
+        // The margin: the longest loop (first of equals).
+        let margin =
+            (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
+        if let Some(mi) = margin {
+            for (i, l) in loops.iter().enumerate() {
+                if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
+                    continue;
+                }
+                let c = l
+                    .iter()
+                    .fold(DVec3::ZERO, |a, &v| a + m.positions[v as usize])
+                    / l.len() as f64;
+                let ci = m.positions.len() as u32;
+                m.positions.push(c);
+                source.push(u32::MAX);
+                // The loop runs with the surface on its left; the cap uses each boundary edge
+                // in the opposite direction.
+                for j in 0..l.len() {
+                    let (a, b) = (l[j], l[(j + 1) % l.len()]);
+                    m.triangles.push([b, a, ci]);
+                }
+                rep.filled_holes += 1;
+                rep.added_vertices += 1;
+            }
+        }
+    }
+    // 7. Drop unused vertices, keeping the source map in step.
+    let map = m.compact();
+    let mut new_source = vec![0u32; m.positions.len()];
+    for (old, &new) in map.iter().enumerate() {
+        if new != u32::MAX {
+            new_source[new as usize] = source[old];
+        }
+    }
+    (m, new_source, rep)
+}
+
+/// Makes every edge shared by two faces run in opposite directions in them; returns the number
+/// of faces flipped. Faces that cannot be made consistent (non-orientable) are dropped.
+fn orient_consistently(m: &mut TriMesh) -> usize {
+    let nf = m.triangles.len();
+    // Undirected edge → faces.
+    let mut keyed: Vec<((u32, u32), u32)> = Vec::with_capacity(nf * 3);
+    for (f, t) in m.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            keyed.push(((a.min(b), a.max(b)), f as u32));
+        }
+    }
+    keyed.sort_unstable();
+    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); nf];
+    for w in keyed.windows(2) {
+        if w[0].0 == w[1].0 {
+            nbrs[w[0].1 as usize].push(w[1].1);
+            nbrs[w[1].1 as usize].push(w[0].1);
+        }
+    }
+    let has_directed =
+        |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
+    let mut state = vec![0u8; nf]; // 0 unvisited, 1 kept, 2 flipped
+    let mut drop = vec![false; nf];
+    let mut flipped = 0;
+    for seed in 0..nf {
+        if state[seed] != 0 {
+            continue;
+        }
+        state[seed] = 1;
+        let mut queue = std::collections::VecDeque::from([seed]);
+        let mut comp = vec![seed];
+        while let Some(f) = queue.pop_front() {
+            let tf = m.triangles[f];
+            for &g in &nbrs[f] {
+                let g = g as usize;
+                let tg = m.triangles[g];
+                // Shared edge a→b in f; consistent when g has b→a.
+                let shared = (0..3)
+                    .map(|k| (tf[k], tf[(k + 1) % 3]))
+                    .find(|&(a, b)| tg.contains(&a) && tg.contains(&b));
+                let Some((a, b)) = shared else { continue };
+                let consistent_now = has_directed(&tg, b, a);
+                if state[g] == 0 {
+                    if !consistent_now {
+                        m.triangles[g].swap(1, 2);
+                        state[g] = 2;
+                    } else {
+                        state[g] = 1;
+                    }
+                    comp.push(g);
+                    queue.push_back(g);
+                } else if !consistent_now && !drop[f] {
+                    drop[g] = true;
+                }
+            }
+        }
+        // Majority orientation by original area: flip the whole component back if most of its
+        // area was flipped.
+        let flipped_area: f64 = comp
+            .iter()
+            .filter(|&&f| state[f] == 2)
+            .map(|&f| m.face_cross(f).length())
+            .sum();
+        let total: f64 = comp.iter().map(|&f| m.face_cross(f).length()).sum();
+        if flipped_area > 0.5 * total {
+            for &f in &comp {
+                m.triangles[f].swap(1, 2);
+                state[f] = if state[f] == 2 { 1 } else { 2 };
+            }
+        }
+        flipped += comp.iter().filter(|&&f| state[f] == 2).count();
+    }
+    if drop.iter().any(|d| *d) {
+        let kept: Vec<[u32; 3]> = m
+            .triangles
+            .iter()
+            .zip(&drop)
+            .filter_map(|(t, &d)| (!d).then_some(*t))
+            .collect();
+        m.triangles = kept;
+    }
+    flipped
+}
+
+/// Gives each extra fan of a bow-tie vertex its own copy of the vertex; returns copies made.
+fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>) -> usize {
+    let mut made = 0;
+    for _round in 0..4 {
+        let bad = non_manifold_vertices(m);
+        if bad.is_empty() {
+            break;
+        }
+        for v in bad {
+            // Faces around v, grouped into fans by shared edges through v.
+            let fan_faces: Vec<usize> = (0..m.triangles.len())
+                .filter(|&f| m.triangles[f].contains(&v))
+                .collect();
+            let k = fan_faces.len();
+            let mut parent: Vec<usize> = (0..k).collect();
+            fn find(p: &mut [usize], mut x: usize) -> usize {
+                while p[x] != x {
+                    p[x] = p[p[x]];
+                    x = p[x];
+                }
+                x
+            }
+            for i in 0..k {
+                for j in i + 1..k {
+                    let (ti, tj) = (m.triangles[fan_faces[i]], m.triangles[fan_faces[j]]);
+                    let shares = ti.iter().any(|&a| a != v && tj.contains(&a));
+                    if shares {
+                        let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                        parent[a.max(b)] = a.min(b);
+                    }
+                }
+            }
+            let mut roots: Vec<usize> = (0..k).map(|i| find(&mut parent, i)).collect();
+            let first_root = roots[0];
+            let mut copies: Vec<(usize, u32)> = Vec::new();
+            for i in 0..k {
+                let r = roots[i];
+                if r == first_root {
+                    continue;
+                }
+                let nv = match copies.iter().find(|c| c.0 == r) {
+                    Some(c) => c.1,
+                    None => {
+                        let nv = m.positions.len() as u32;
+                        m.positions.push(m.positions[v as usize]);
+                        source.push(source[v as usize]);
+                        copies.push((r, nv));
+                        made += 1;
+                        nv
+                    }
+                };
+                for c in m.triangles[fan_faces[i]].iter_mut() {
+                    if *c == v {
+                        *c = nv;
+                    }
+                }
+            }
+            roots.clear();
+        }
+    }
+    made
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::fixtures::{cube, square};
+
+    fn disk_with_hole() -> TriMesh {
+        // Cube without its bottom (margin) and with one top triangle pair removed (a hole).
+        let mut m = cube(1.0);
+        m.triangles.drain(0..2);
+        m
+    }
+
+    #[test]
+    fn clean_patch_is_unchanged() {
+        let m = disk_with_hole();
+        let (r, src, rep) = repair_open_surface(&m, &RepairOptions::default());
+        assert!(rep.is_clean(), "{rep:?}");
+        assert_eq!(r.triangles, m.triangles);
+        assert_eq!(src, (0..8).collect::<Vec<u32>>());
+    }
+
+    #[test]
+    fn fixes_duplicates_flips_islands_and_holes() {
+        let mut m = cube(1.0);
+        m.triangles.drain(0..2); // margin: bottom square
+        m.triangles.drain(0..2); // a hole on top, smaller? same size: make it a triangle hole instead
+        m.triangles.push([4, 5, 6]); // put back half the top: hole is triangle 4-6-7
+        m.triangles.push([4, 5, 6]); // duplicate
+        m.triangles[3].swap(1, 2); // a flipped face
+        m.triangles.push([5, 5, 6]); // degenerate
+        // A stray island.
+        let off = m.positions.len() as u32;
+        m.positions.extend([
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::new(6.0, 0.0, 0.0),
+            DVec3::new(5.0, 1.0, 0.0),
+        ]);
+        m.triangles.push([off, off + 1, off + 2]);
+        // The hole (perimeter 3.41) is 85% of the margin (4): fill up to 90%.
+        let opts = RepairOptions {
+            max_hole_fraction: 0.9,
+        };
+        let (r, src, rep) = repair_open_surface(&m, &opts);
+        assert_eq!(rep.duplicate_faces, 1);
+        assert_eq!(rep.degenerate_faces, 1);
+        assert_eq!(rep.island_faces, 1);
+        assert_eq!(rep.flipped_faces, 1);
+        assert_eq!(rep.filled_holes, 1);
+        let report = r.validate(&Default::default()).unwrap();
+        assert_eq!(report.boundary_loops, 1);
+        assert_eq!(report.components, 1);
+        // Outward orientation kept: the top cap faces up.
+        let up = r
+            .triangles
+            .iter()
+            .enumerate()
+            .filter(|(f, _)| r.face_cross(*f).z > 0.0)
+            .count();
+        assert!(up >= 2);
+        // Every kept original vertex sits where it was.
+        for (i, &s) in src.iter().enumerate() {
+            if s != u32::MAX {
+                assert_eq!(r.positions[i], m.positions[s as usize]);
+            }
+        }
+    }
+
+    #[test]
+    fn splits_bow_tie_and_drops_third_face_on_edge() {
+        let m = TriMesh::new(
+            vec![
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::Y,
+                -DVec3::X,
+                -DVec3::Y,
+                DVec3::Z,
+            ],
+            vec![[0, 1, 2], [0, 3, 4], [0, 2, 5], [0, 2, 1]],
+        );
+        let (r, _, rep) = repair_open_surface(
+            &m,
+            &RepairOptions {
+                max_hole_fraction: 0.0,
+            },
+        );
+        assert_eq!(rep.duplicate_faces, 1);
+        r.validate(&Default::default()).unwrap();
+        // The second fan of vertex 0 touched the rest only at that vertex: an island.
+        assert_eq!(rep.island_faces, 1);
+        // A real bow-tie inside one edge-connected piece: a hexagon fan around vertex 0 with two
+        // opposite triangles missing, the two remaining fans joined by two bridge triangles.
+        let mut p = vec![DVec3::ZERO];
+        p.extend((0..6).map(|k| {
+            let a = k as f64 * std::f64::consts::PI / 3.0;
+            DVec3::new(a.cos(), a.sin(), 0.0)
+        }));
+        let m = TriMesh::new(
+            p,
+            vec![
+                [0, 2, 3],
+                [0, 3, 4],
+                [0, 5, 6],
+                [0, 6, 1],
+                [3, 2, 1],
+                [1, 6, 3],
+            ],
+        );
+        assert_eq!(m.topology_report().non_manifold_vertices, 1);
+        let (r, src, rep) = repair_open_surface(
+            &m,
+            &RepairOptions {
+                max_hole_fraction: 0.0,
+            },
+        );
+        assert_eq!(rep.split_vertices, 1);
+        assert_eq!(
+            r.validate(&Default::default())
+                .unwrap()
+                .non_manifold_vertices,
+            0
+        );
+        assert_eq!(src.iter().filter(|&&s| s == 0).count(), 2);
+        let sq = square();
+        let (r2, _, rep2) = repair_open_surface(&sq, &RepairOptions::default());
+        assert!(rep2.is_clean());
+        assert_eq!(r2, sq);
+    }
+}
