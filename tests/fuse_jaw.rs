@@ -85,14 +85,20 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
         assert_eq!(q.self_intersections, Some(0), "{tag}: tooth {fdi}");
         let crown = &crowns[&fdi];
         let t = &transforms[&fdi];
-        for (i, v) in crown.positions.iter().enumerate() {
-            assert_eq!(
-                f.mesh.positions[i],
-                t.ios_to_output.apply(*v),
-                "{tag}: tooth {fdi} vertex {i}"
-            );
-            assert_eq!(f.source[i], VertexSource::Ios as u8);
+        let mut seen = vec![false; crown.positions.len()];
+        for (i, &iv) in f.ios_vertex.iter().enumerate() {
+            if iv != u32::MAX {
+                let want = t.ios_to_output.apply(crown.positions[iv as usize]);
+                assert_eq!(f.mesh.positions[i], want, "{tag}: tooth {fdi} vertex {iv}");
+                assert_eq!(f.source[i], VertexSource::Ios as u8);
+                seen[iv as usize] = true;
+            }
         }
+        let missing = seen.iter().filter(|s| !**s).count();
+        assert_eq!(
+            missing, 0,
+            "{tag}: tooth {fdi}: IOS crown vertices missing from the fused mesh"
+        );
         let truth = &p.truth.teeth[&fdi];
         let to_ios = p.truth.world_to_ios.compose(&truth.ios_drift);
         let surface: TriMesh = truth.surface.transformed(&to_ios);

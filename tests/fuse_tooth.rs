@@ -27,10 +27,21 @@ fn check(preset: Preset, seed: u64) {
     assert_eq!(q.degenerate_faces, 0);
     assert_eq!(self_intersections(&f.mesh).len(), 0, "self-intersections");
     // Every IOS crown vertex, bitwise, in order, labeled IOS.
-    for (i, p) in c.crown.positions.iter().enumerate() {
-        assert_eq!(f.mesh.positions[i], c.ios_to_output.apply(*p));
-        assert_eq!(f.source[i], VertexSource::Ios as u8);
+    let mut seen = vec![false; c.crown.positions.len()];
+    for (i, &iv) in f.ios_vertex.iter().enumerate() {
+        if iv != u32::MAX {
+            assert_eq!(
+                f.mesh.positions[i],
+                c.ios_to_output.apply(c.crown.positions[iv as usize])
+            );
+            assert_eq!(f.source[i], VertexSource::Ios as u8);
+            seen[iv as usize] = true;
+        }
     }
+    assert!(
+        seen.iter().all(|&s| s),
+        "every IOS crown vertex is in the fused mesh"
+    );
     assert_eq!(f.source.len(), f.mesh.positions.len());
     // Accuracy against the truth.
     let truth = SurfaceDistance::new(&c.truth);

@@ -5,7 +5,7 @@
 use super::quality::{self, ToothQuality};
 use super::{FuseOptions, VertexSource};
 use crate::cut::{self, ToothFrame};
-use crate::mesh::{EdgeTopology, TriMesh, boundary_loops};
+use crate::mesh::{EdgeTopology, RepairOptions, TriMesh, boundary_loops, repair_open_surface};
 use crate::stitch::{self, BandLoops, BandVertex};
 use crate::{Error, Result, Rigid};
 use glam::DVec3;
@@ -15,21 +15,18 @@ use glam::DVec3;
 pub struct FusedTooth {
     /// FDI number.
     pub fdi: u8,
-    /// The fused closed mesh, output frame. Vertices: first the IOS crown's (same order as the
-    /// crown input), then hole fills, band interior, CBCT root.
+    /// The fused closed mesh, output frame. Vertices: first the (repaired) IOS crown's, then the
+    /// band interior, then the CBCT root.
     pub mesh: TriMesh,
     /// Per vertex: [`VertexSource`] as `u8` (0 IOS, 1 band or fill, 2 CBCT).
     pub source: Vec<u8>,
+    /// Per vertex of `mesh`: the index of the IOS crown input vertex it is (its position is
+    /// bitwise `ios_to_output.apply(input)`), or `u32::MAX` for band, fill and CBCT vertices.
+    pub ios_vertex: Vec<u32>,
     /// Quality report.
     pub quality: ToothQuality,
     /// Warnings (filled holes, flipped input orientation, self-intersections).
     pub warnings: Vec<String>,
-}
-
-fn polyline_length(pts: &[DVec3]) -> f64 {
-    (0..pts.len())
-        .map(|i| (pts[(i + 1) % pts.len()] - pts[i]).length())
-        .sum()
 }
 
 /// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
@@ -50,8 +47,9 @@ fn loop_dirs(mesh: &TriMesh, lp: &[u32], axis: DVec3) -> Vec<DVec3> {
         .collect()
 }
 
-/// Fuses one tooth. `ios_crown` (IOS frame) must be an open crown whose longest boundary loop is
-/// the gingival margin; other boundary loops (small holes) are filled. `cbct` (CBCT frame) must
+/// Fuses one tooth. `ios_crown` (IOS frame) is an open crown whose longest boundary loop is the
+/// gingival margin; it is repaired first ([`repair_open_surface`]: small holes filled, bow-ties
+/// split, islands dropped). `cbct` (CBCT frame) must
 /// be closed and manifold.
 pub fn fuse_tooth(
     fdi: u8,
@@ -74,35 +72,26 @@ fn fuse_inner(
     opts: &FuseOptions,
 ) -> Result<FusedTooth> {
     let mut warnings = Vec::new();
-    ios_crown.validate(&Default::default())?;
-    let mut crown = ios_crown.transformed(ios_to_output);
+    // Real crowns are messy: make the crown one oriented manifold disk, filling small holes
+    // (every kept vertex keeps its exact position).
+    let (repaired, rep_src, rep) = repair_open_surface(ios_crown, &RepairOptions::default());
+    if !rep.is_clean() {
+        warnings.push(format!("IOS crown repaired: {rep:?}"));
+    }
+    let mut crown = repaired.transformed(ios_to_output);
     let mut root_in = cbct.transformed(cbct_to_output);
     if root_in.signed_volume() < 0.0 {
         root_in.flip();
         warnings.push("CBCT tooth was inward-oriented; flipped".into());
     }
-    // Margin = the longest boundary loop; the others are holes to fill.
-    let mut loops = boundary_loops(&crown);
-    if loops.is_empty() {
-        return Err(Error::InvalidArgument(
-            "IOS crown has no boundary (no gingival margin)".into(),
-        ));
+    let loops = boundary_loops(&crown);
+    if loops.len() != 1 {
+        return Err(Error::InvalidArgument(format!(
+            "IOS crown has {} boundary loops after repair; exactly one (the gingival margin) is needed",
+            loops.len()
+        )));
     }
-    let lens: Vec<f64> = loops
-        .iter()
-        .map(|l| {
-            polyline_length(
-                &l.iter()
-                    .map(|&v| crown.positions[v as usize])
-                    .collect::<Vec<_>>(),
-            )
-        })
-        .collect();
-    let mi = (0..loops.len())
-        .max_by(|&a, &b| lens[a].total_cmp(&lens[b]).then(b.cmp(&a)))
-        .unwrap_or(0);
-    let mut margin = loops.swap_remove(mi);
-    let holes = loops;
+    let mut margin = loops.into_iter().next().unwrap_or_default();
     let crown_centroid = crate::geom::centroid(&crown.positions).unwrap_or(DVec3::ZERO);
     let margin_pts: Vec<DVec3> = margin
         .iter()
@@ -116,30 +105,24 @@ fn fuse_inner(
         margin.reverse();
         warnings.push("IOS crown was inward-oriented; flipped".into());
     }
-    let n_crown = crown.positions.len();
-    let mut mesh = crown.clone();
-    let mut source = vec![VertexSource::Ios as u8; n_crown];
-    // Fill small holes with a fan around their centroid.
-    for h in &holes {
-        let pts: Vec<DVec3> = h.iter().map(|&v| mesh.positions[v as usize]).collect();
-        let c = crate::geom::centroid(&pts).unwrap_or(DVec3::ZERO);
-        let ci = mesh.positions.len() as u32;
-        mesh.positions.push(c);
-        source.push(VertexSource::Band as u8);
-        for i in 0..h.len() {
-            let (a, b) = (h[i], h[(i + 1) % h.len()]);
-            let hole = if opts_flipped(&warnings) {
-                [a, b, ci]
+    let mut mesh = crown;
+    let mut ios_vertex = rep_src;
+    let source: Vec<u8> = ios_vertex
+        .iter()
+        .map(|&s| {
+            if s == u32::MAX {
+                VertexSource::Band as u8
             } else {
-                [b, a, ci]
-            };
-            mesh.triangles.push(hole);
-        }
-    }
-    if !holes.is_empty() {
+                VertexSource::Ios as u8
+            }
+        })
+        .collect();
+    let mut source = source;
+    let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
+    let dropped = ios_crown.positions.len().saturating_sub(kept_ios);
+    if dropped > 0 {
         warnings.push(format!(
-            "{} small hole(s) in the IOS crown filled",
-            holes.len()
+            "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
         ));
     }
     let crown_dirs = loop_dirs(&mesh, &margin, frame.axis);
@@ -165,6 +148,7 @@ fn fuse_inner(
     // Assemble: band interior, then root.
     let band_off = mesh.positions.len() as u32;
     mesh.positions.extend_from_slice(&band.points);
+    ios_vertex.resize(mesh.positions.len() + rc.root.positions.len(), u32::MAX);
     source.extend(std::iter::repeat_n(
         VertexSource::Band as u8,
         band.points.len(),
@@ -206,8 +190,8 @@ fn fuse_inner(
     mesh.triangles
         .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
-    q.crown_vertices = n_crown;
-    q.holes_filled = holes.len();
+    q.crown_vertices = kept_ios;
+    q.holes_filled = rep.filled_holes;
     q.cbct_faces_removed = rc.removed_faces;
     if !(q.closed && q.manifold && q.components == 1) {
         return Err(Error::InvalidArgument(format!(
@@ -223,13 +207,10 @@ fn fuse_inner(
         fdi,
         mesh,
         source,
+        ios_vertex,
         quality: q,
         warnings,
     })
-}
-
-fn opts_flipped(w: &[String]) -> bool {
-    w.iter().any(|s| s.starts_with("IOS crown was inward"))
 }
 
 fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
