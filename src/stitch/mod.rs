@@ -152,8 +152,57 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         let a = frame.angle(p);
         [r * a.cos(), r * a.sin()]
     };
+    let place = |p: &ParamPoint| -> ([f64; 2], f64) {
+        let xy = plane(p.pos);
+        let rho = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
+        (xy, 0.4 * spacing(p.v) * rho / r_mean)
+    };
     let up_xy: Vec<[f64; 2]> = up_pts.iter().map(|&p| plane(p)).collect();
     let lo_xy: Vec<[f64; 2]> = lo_pts.iter().map(|&p| plane(p)).collect();
+    let inner: Vec<([f64; 2], DVec3, f64)> = interior
+        .iter()
+        .map(|p| {
+            let (xy, d) = place(p);
+            (xy, p.pos, d)
+        })
+        .collect();
+    match triangulate(&up_xy, &lo_xy, &uo, &lo, &inner) {
+        Ok(b) => Ok(b),
+        Err(first) => {
+            // Fallback when a loop folds back around the axis (the cylindrical projection is not
+            // simple): loops on concentric circles by their turn parameter, interior points by
+            // theirs. Always a valid annulus; the quality report checks the 3D result.
+            let up_raw = LoopParam::upper(up_pts.clone(), vec![DVec3::Z; nu])?;
+            let lo_raw =
+                LoopParam::lower_aligned(lo_pts.clone(), vec![DVec3::Z; nl], &up_raw, frame)?;
+            let up_xy: Vec<[f64; 2]> = up_raw.phi.iter().map(|&f| loft.plane(f, 1.0)).collect();
+            let lo_xy: Vec<[f64; 2]> = lo_raw.phi.iter().map(|&f| loft.plane(f, 0.0)).collect();
+            let inner: Vec<([f64; 2], DVec3, f64)> = interior
+                .iter()
+                .map(|p| {
+                    let xy = loft.plane(p.phi, p.v);
+                    let rho = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
+                    (xy, p.pos, 0.4 * spacing(p.v) * rho / r_mean)
+                })
+                .collect();
+            triangulate(&up_xy, &lo_xy, &uo, &lo, &inner)
+                .map_err(|e| Error::InvalidArgument(format!("{first}; annulus fallback: {e}")))
+        }
+    }
+}
+
+/// Constrained Delaunay triangulation of the annulus between the polygons `up_xy` (outer,
+/// counter-clockwise) and `lo_xy` (inner, counter-clockwise), with interior points
+/// `(plane position, 3D position, minimum plane distance to the loops)`; keeps the triangles
+/// between the polygons. `uo`/`lo` map polygon order back to the caller's loop indices.
+fn triangulate(
+    up_xy: &[[f64; 2]],
+    lo_xy: &[[f64; 2]],
+    uo: &[u32],
+    lo: &[u32],
+    interior: &[([f64; 2], DVec3, f64)],
+) -> Result<Band> {
+    let (nu, nl) = (up_xy.len(), lo_xy.len());
 
     let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
         ConstrainedDelaunayTriangulation::new();
@@ -201,21 +250,18 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         }
     }
     let mut points = Vec::new();
-    for p in &interior {
-        if !p.pos.is_finite() {
+    for &(xy, pos, min_d) in interior {
+        if !pos.is_finite() {
             continue;
         }
-        let xy = plane(p.pos);
-        let rho = (xy[0] * xy[0] + xy[1] * xy[1]).sqrt();
-        // Strictly inside the annulus, and not closer to a loop than a fraction of the spacing.
-        let min_d = 0.4 * spacing(p.v) * rho / r_mean;
-        let (in_u, d_u) = polygon_side(&up_xy, xy);
-        let (in_l, d_l) = polygon_side(&lo_xy, xy);
+        // Strictly inside the annulus, and not closer to a loop than `min_d`.
+        let (in_u, d_u) = polygon_side(up_xy, xy);
+        let (in_l, d_l) = polygon_side(lo_xy, xy);
         if !in_u || in_l || d_u < min_d || d_l < min_d {
             continue;
         }
         if insert(&mut cdt, xy, BandVertex::Interior(points.len() as u32))?.is_some() {
-            points.push(p.pos);
+            points.push(pos);
         }
     }
     // Every loop edge must have survived as a constraint edge.
