@@ -49,11 +49,13 @@ fn ply_round_trip_is_bitwise_in_every_encoding() {
 #[test]
 fn ply_ascii_variants_quads_face_labels_float_labels() {
     let d = scratch("ply_ascii");
-    let text = "ply\nformat ascii 1.0\ncomment quad + triangle\nelement vertex 5\n\
+    let text = "ply\nformat ascii 1.0\ncomment quad + triangle, an edge element, a colour\nelement vertex 5\n\
         property float x\nproperty float y\nproperty float z\nproperty float label\n\
-        element face 2\nproperty list uchar uint vertex_index\nproperty ushort label\nend_header\n\
-        0 0 0 11\n1 0 0 11\n1 1 0 11\n0 1 0 21\n2 0 0.5 21\n\
-        4 0 1 2 3 36\n3 1 4 2 37\n";
+        element edge 1\nproperty int vertex1\nproperty int vertex2\n\
+        element face 2\nproperty list uchar uint vertex_index\nproperty ushort label\n\
+        property uchar red\nend_header\n\
+        0 0 0 11\n1 0 0 11\n1 1 0 11\n0 1 0 21\n2 0 0.5 21\n0 1\n\
+        4 0 1 2 3 36 255\n3 1 4 2 37 0\n";
     let lm = read_mesh(put(&d, "a.ply", text.as_bytes())).unwrap();
     assert_eq!(lm.mesh.vertex_count(), 5);
     assert_eq!(lm.mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]]);

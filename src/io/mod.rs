@@ -12,6 +12,7 @@ mod stl;
 mod teeth;
 mod vtk_legacy;
 mod vtp;
+mod vtp_data;
 mod vtp_write;
 
 pub use ply::{read_ply_bytes, write_ply};

@@ -3,7 +3,8 @@
 //! Read: `vertex` element with `x, y, z` (any scalar type), optional per-vertex label property
 //! (see [`super::label_rank`]; any numeric type); `face` element with `vertex_indices` or
 //! `vertex_index` (a list of any integer type, fan-triangulated) and an optional face label.
-//! Write: `x, y, z` as double (lossless) plus `int` vertex properties.
+//! Read through `ply-rs-bw` with typed elements (no per-vertex maps). Write: `x, y, z` as
+//! double (lossless) plus `int` vertex properties.
 
 use super::{
     FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64, label_rank,
@@ -11,24 +12,78 @@ use super::{
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
-use ply_rs_bw::parser::Parser;
+use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
-    DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType, ScalarType,
+    DefaultElement, ElementDef, Property, PropertyAccess, PropertyAccessResult, PropertyType,
 };
-use ply_rs_bw::writer::Writer;
 use std::io::Write;
+
+/// A `vertex` element as parsed: coordinates and the best-ranked label property.
+#[derive(Default)]
+struct PlyVertex {
+    xyz: [Option<f64>; 3],
+    label: Option<(u8, f64)>,
+}
+
+impl PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(&mut self, key: &str, p: Property) -> PropertyAccessResult {
+        let slot = match key {
+            "x" => Some(0),
+            "y" => Some(1),
+            "z" => Some(2),
+            _ => None,
+        };
+        match (slot, scalar_f64(&p)) {
+            (Some(k), v) => self.xyz[k] = v,
+            (None, Some(v)) => keep_label(&mut self.label, key, v),
+            (None, None) => {}
+        }
+        PropertyAccessResult::Set
+    }
+}
+
+/// A `face` element as parsed: its index list (as stored) and the best-ranked label.
+#[derive(Default)]
+struct PlyFace {
+    idx: Option<Property>,
+    label: Option<(u8, f64)>,
+}
+
+impl PropertyAccess for PlyFace {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(&mut self, key: &str, p: Property) -> PropertyAccessResult {
+        if key == "vertex_indices" || (key == "vertex_index" && self.idx.is_none()) {
+            self.idx = Some(p);
+        } else if let Some(v) = scalar_f64(&p) {
+            keep_label(&mut self.label, key, v);
+        }
+        PropertyAccessResult::Set
+    }
+}
+
+/// Keeps the value of the best-ranked label property (first one on ties).
+fn keep_label(slot: &mut Option<(u8, f64)>, key: &str, v: f64) {
+    if let Some(r) = label_rank(key)
+        && slot.is_none_or(|(best, _)| r < best)
+    {
+        *slot = Some((r, v));
+    }
+}
 
 /// Reads a PLY file held in memory; `file` names it in error messages.
 pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
-    let parser = Parser::<DefaultElement>::new();
-    let mut src = bytes;
-    let ply = parser
-        .read_ply(&mut src)
-        .map_err(|e| Error::Io(format!("{file}: malformed PLY: {e}")))?;
     let err = |m: String| Error::Io(format!("{file}: {m}"));
-
-    let vdef = ply
-        .header
+    let perr = |e: ply_rs_bw::parser::ParseError| Error::Io(format!("{file}: malformed PLY: {e}"));
+    let mut rd = Reader::new(bytes);
+    let header = Parser::<DefaultElement>::new()
+        .read_header(&mut rd)
+        .map_err(perr)?;
+    let vdef = header
         .elements
         .get("vertex")
         .ok_or_else(|| err("no `vertex` element in the header".into()))?;
@@ -38,70 +93,93 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
             _ => return Err(err(format!("vertex property `{c}` missing or a list"))),
         }
     }
-    let vlabel_name = best_label(vdef);
-    let verts = ply.payload.get("vertex").map(Vec::as_slice).unwrap_or(&[]);
+    let has_vlabel = best_label(vdef).is_some();
+    let mut verts: Vec<PlyVertex> = Vec::new();
+    let mut faces: Vec<PlyFace> = Vec::new();
+    let mut face_key = None;
+    let mut has_flabel = false;
+    // Elements are stored in file order; each is read with its own element type.
+    for (name, def) in &header.elements {
+        match name.as_str() {
+            "vertex" => {
+                verts = Parser::<PlyVertex>::new()
+                    .read_payload_for_element(&mut rd, def, &header)
+                    .map_err(perr)?;
+            }
+            "face" => {
+                face_key = ["vertex_indices", "vertex_index"]
+                    .into_iter()
+                    .find(|k| def.properties.contains_key(*k));
+                if face_key.is_none() {
+                    return Err(err(
+                        "face element has neither `vertex_indices` nor `vertex_index`".into(),
+                    ));
+                }
+                has_flabel = best_label(def).is_some();
+                faces = Parser::<PlyFace>::new()
+                    .read_payload_for_element(&mut rd, def, &header)
+                    .map_err(perr)?;
+            }
+            _ => {
+                Parser::<Skip>::new()
+                    .read_payload_for_element(&mut rd, def, &header)
+                    .map_err(perr)?;
+            }
+        }
+    }
     check_vertex_count(file, verts.len())?;
     let mut positions = Vec::with_capacity(verts.len());
-    let mut vlabels = vlabel_name
-        .as_ref()
-        .map(|_| Vec::with_capacity(verts.len()));
+    let mut vlabels = has_vlabel.then(|| Vec::with_capacity(verts.len()));
     for (i, v) in verts.iter().enumerate() {
-        let c = |k: &str| v.get(k).and_then(scalar_f64);
-        let (Some(x), Some(y), Some(z)) = (c("x"), c("y"), c("z")) else {
+        let [Some(x), Some(y), Some(z)] = v.xyz else {
             return Err(err(format!("vertex {i} lacks a numeric x, y or z")));
         };
         positions.push(DVec3::new(x, y, z));
-        if let (Some(name), Some(out)) = (&vlabel_name, vlabels.as_mut()) {
-            let l = v
-                .get(name.as_str())
-                .and_then(scalar_f64)
-                .unwrap_or(f64::NAN);
+        if let Some(out) = vlabels.as_mut() {
+            let l = v.label.map_or(f64::NAN, |(_, l)| l);
             out.push(label_from_f64(l, file, "vertex", i)?);
         }
     }
     check_finite(file, &positions)?;
 
     let mut fb = FaceBuilder::new(file, positions.len());
-    let mut face_labels = None;
-    if let Some(fdef) = ply.header.elements.get("face") {
-        let key = ["vertex_indices", "vertex_index"]
-            .into_iter()
-            .find(|k| fdef.properties.contains_key(*k))
-            .ok_or_else(|| {
-                err("face element has neither `vertex_indices` nor `vertex_index`".into())
-            })?;
-        let flabel_name = best_label(fdef);
-        let faces = ply.payload.get("face").map(Vec::as_slice).unwrap_or(&[]);
-        let mut plabels = Vec::new();
-        let mut idx = Vec::new();
-        for (f, e) in faces.iter().enumerate() {
-            idx.clear();
-            if !list_i64(e.get(key), &mut idx) {
-                return Err(err(format!("face {f}: `{key}` is not a list of integers")));
-            }
-            fb.polygon(&idx)?;
-            if let Some(name) = &flabel_name {
-                let l = e
-                    .get(name.as_str())
-                    .and_then(scalar_f64)
-                    .unwrap_or(f64::NAN);
-                plabels.push(label_from_f64(l, file, "face", f)?);
-            }
+    let mut plabels = Vec::new();
+    let mut idx = Vec::new();
+    let key = face_key.unwrap_or("vertex_indices");
+    for (f, e) in faces.iter().enumerate() {
+        idx.clear();
+        if !list_i64(e.idx.as_ref(), &mut idx) {
+            return Err(err(format!("face {f}: `{key}` is not a list of integers")));
         }
-        if flabel_name.is_some() {
-            face_labels = Some(
-                fb.source_poly
-                    .iter()
-                    .map(|&p| plabels[p as usize])
-                    .collect(),
-            );
+        fb.polygon(&idx)?;
+        if has_flabel {
+            let l = e.label.map_or(f64::NAN, |(_, l)| l);
+            plabels.push(label_from_f64(l, file, "face", f)?);
         }
     }
+    let face_labels = has_flabel.then(|| {
+        fb.source_poly
+            .iter()
+            .map(|&p| plabels[p as usize])
+            .collect()
+    });
     Ok(LabeledMesh {
         mesh: TriMesh::new(positions, fb.triangles),
         vertex_labels: vlabels,
         face_labels,
     })
+}
+
+/// Elements other than `vertex` and `face` are read (to advance) and dropped.
+struct Skip;
+
+impl PropertyAccess for Skip {
+    fn new() -> Self {
+        Skip
+    }
+    fn set_property(&mut self, _: &str, _: Property) -> PropertyAccessResult {
+        PropertyAccessResult::Set
+    }
 }
 
 /// The best label property of an element (scalar only).
@@ -142,7 +220,8 @@ fn list_i64(p: Option<&Property>, out: &mut Vec<i64>) -> bool {
 }
 
 /// Writes a PLY: `x, y, z` as double, one `int` property per entry of `vertex_int_props`, and
-/// faces as `vertex_indices` (uchar count, int indices).
+/// faces as `vertex_indices` (uchar count, int indices). Written directly (the header is
+/// simple and the payload is a flat record per element), read back by `ply-rs-bw` in tests.
 pub fn write_ply(
     out: &mut impl Write,
     mesh: &TriMesh,
@@ -150,24 +229,14 @@ pub fn write_ply(
     encoding: PlyEncoding,
 ) -> Result<()> {
     super::check_mesh_indices(mesh)?;
-    let mut ply = Ply::<DefaultElement>::new();
-    ply.header.encoding = match encoding {
-        PlyEncoding::BinaryLittleEndian => Encoding::BinaryLittleEndian,
-        PlyEncoding::BinaryBigEndian => Encoding::BinaryBigEndian,
-        PlyEncoding::Ascii => Encoding::Ascii,
-    };
-    ply.header
-        .comments
-        .push("written by toothfuse (units: mm)".into());
-    let mut vdef = ElementDef::new("vertex".into());
-    vdef.count = mesh.vertex_count();
-    for c in ["x", "y", "z"] {
-        add_prop(&mut vdef, c, PropertyType::Scalar(ScalarType::Double));
-    }
-    for (name, values) in vertex_int_props {
-        if ["x", "y", "z"].contains(name) || vdef.properties.contains_key(*name) {
+    for (k, (name, values)) in vertex_int_props.iter().enumerate() {
+        let bad_name = name.is_empty() || name.chars().any(|c| c.is_whitespace());
+        if bad_name
+            || ["x", "y", "z"].contains(name)
+            || vertex_int_props[..k].iter().any(|(n, _)| n == name)
+        {
             return Err(Error::InvalidArgument(format!(
-                "vertex property name {name:?} is used twice"
+                "vertex property name {name:?} is empty, has spaces or is used twice"
             )));
         }
         if values.len() != mesh.vertex_count() {
@@ -177,54 +246,70 @@ pub fn write_ply(
                 mesh.vertex_count()
             )));
         }
-        add_prop(&mut vdef, name, PropertyType::Scalar(ScalarType::Int));
     }
-    let mut fdef = ElementDef::new("face".into());
-    fdef.count = mesh.face_count();
-    add_prop(
-        &mut fdef,
-        "vertex_indices",
-        PropertyType::List(ScalarType::UChar, ScalarType::Int),
+    let format = match encoding {
+        PlyEncoding::BinaryLittleEndian => "binary_little_endian",
+        PlyEncoding::BinaryBigEndian => "binary_big_endian",
+        PlyEncoding::Ascii => "ascii",
+    };
+    let mut b: Vec<u8> = Vec::with_capacity(
+        256 + mesh.vertex_count() * (24 + 4 * vertex_int_props.len()) + mesh.face_count() * 13,
     );
-    ply.header.elements.insert("vertex".into(), vdef);
-    ply.header.elements.insert("face".into(), fdef);
-
-    let verts = mesh
-        .positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let mut e = DefaultElement::new();
-            e.insert("x".into(), Property::Double(p.x));
-            e.insert("y".into(), Property::Double(p.y));
-            e.insert("z".into(), Property::Double(p.z));
-            for (name, values) in vertex_int_props {
-                e.insert((*name).to_string(), Property::Int(values[i]));
+    let _ = write!(
+        b,
+        "ply\nformat {format} 1.0\ncomment written by toothfuse (units: mm)\n\
+         element vertex {}\nproperty double x\nproperty double y\nproperty double z\n",
+        mesh.vertex_count()
+    );
+    for (name, _) in vertex_int_props {
+        let _ = writeln!(b, "property int {name}");
+    }
+    let _ = write!(
+        b,
+        "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        mesh.face_count()
+    );
+    let big = encoding == PlyEncoding::BinaryBigEndian;
+    let f64b = |v: f64| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let i32b = |v: i32| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    for (i, p) in mesh.positions.iter().enumerate() {
+        if encoding == PlyEncoding::Ascii {
+            let _ = write!(b, "{} {} {}", p.x, p.y, p.z);
+            for (_, v) in vertex_int_props {
+                let _ = write!(b, " {}", v[i]);
             }
-            e
-        })
-        .collect();
-    let faces = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let mut e = DefaultElement::new();
-            e.insert(
-                "vertex_indices".into(),
-                Property::ListInt(t.iter().map(|&v| v as i32).collect()),
-            );
-            e
-        })
-        .collect();
-    ply.payload.insert("vertex".into(), verts);
-    ply.payload.insert("face".into(), faces);
-    Writer::new()
-        .write_ply(out, &mut ply)
-        .map_err(|e| Error::Io(format!("writing PLY: {e}")))?;
-    Ok(())
-}
-
-fn add_prop(def: &mut ElementDef, name: &str, t: PropertyType) {
-    def.properties
-        .insert(name.to_string(), PropertyDef::new(name.to_string(), t));
+            b.push(b'\n');
+        } else {
+            for c in p.to_array() {
+                b.extend_from_slice(&f64b(c));
+            }
+            for (_, v) in vertex_int_props {
+                b.extend_from_slice(&i32b(v[i]));
+            }
+        }
+    }
+    for t in &mesh.triangles {
+        if encoding == PlyEncoding::Ascii {
+            let _ = writeln!(b, "3 {} {} {}", t[0], t[1], t[2]);
+        } else {
+            b.push(3);
+            for &v in t {
+                b.extend_from_slice(&i32b(v as i32));
+            }
+        }
+    }
+    out.write_all(&b)
+        .map_err(|e| Error::Io(format!("writing PLY: {e}")))
 }

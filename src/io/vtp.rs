@@ -8,15 +8,17 @@
 //! The XML part is parsed by `quick-xml`; the appended block (raw bytes are not XML) is cut
 //! off first and addressed by the arrays' `offset` attributes.
 
+use super::vtp_data::{BlockFormat, b64, block, to_f64, type_size};
 use super::{FaceBuilder, check_finite, check_vertex_count, label_from_f64, label_rank};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
-use base64::Engine;
 use glam::DVec3;
 use quick_xml::events::{BytesStart, Event};
-use std::io::Read;
 
 pub use super::vtp_write::{VtpEncoding, write_vtp};
+
+/// Largest point or cell count accepted from a header (keeps size arithmetic far from overflow).
+const MAX_COUNT: usize = 1 << 40;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Section {
@@ -60,9 +62,7 @@ struct Piece {
 
 struct Ctx<'a> {
     file: &'a str,
-    big_endian: bool,
-    header64: bool,
-    compressed: bool,
+    fmt: BlockFormat,
     appended_base64: bool,
     /// The appended block after its leading `_`.
     appended: &'a [u8],
@@ -79,9 +79,7 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
     rd.config_mut().check_end_names = false;
     let mut ctx = Ctx {
         file,
-        big_endian: false,
-        header64: false,
-        compressed: false,
+        fmt: BlockFormat::default(),
         appended_base64: false,
         appended: &[],
         offsets: Vec::new(),
@@ -108,8 +106,8 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                                 "VTKFile type is {ty:?}; only PolyData is supported"
                             )));
                         }
-                        ctx.big_endian = attr(e, "byte_order")?.as_deref() == Some("BigEndian");
-                        ctx.header64 = match attr(e, "header_type")?.as_deref() {
+                        ctx.fmt.big_endian = attr(e, "byte_order")?.as_deref() == Some("BigEndian");
+                        ctx.fmt.header64 = match attr(e, "header_type")?.as_deref() {
                             None | Some("UInt32") => false,
                             Some("UInt64") => true,
                             Some(h) => {
@@ -118,7 +116,7 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                                 )));
                             }
                         };
-                        ctx.compressed = match attr(e, "compressor")?.as_deref() {
+                        ctx.fmt.compressed = match attr(e, "compressor")?.as_deref() {
                             None | Some("") => false,
                             Some("vtkZLibDataCompressor") => true,
                             Some(c) => {
@@ -132,9 +130,12 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         let n = |k: &str| -> Result<usize> {
                             match attr(e, k)? {
                                 None => Ok(0),
-                                Some(v) => v.trim().parse().map_err(|_| {
-                                    err(format!("Piece attribute {k}={v:?} is not a count"))
-                                }),
+                                Some(v) => match v.trim().parse::<usize>() {
+                                    Ok(c) if c <= MAX_COUNT => Ok(c),
+                                    _ => Err(err(format!(
+                                        "Piece attribute {k}={v:?} is not a plausible count"
+                                    ))),
+                                },
                             }
                         };
                         pieces.push(Piece {
@@ -449,16 +450,6 @@ fn array_desc(file: &str, e: &BytesStart, section: Section) -> Result<ArrayDesc>
     })
 }
 
-fn type_size(ty: &str) -> Option<usize> {
-    Some(match ty {
-        "Int8" | "UInt8" | "Char" => 1,
-        "Int16" | "UInt16" => 2,
-        "Int32" | "UInt32" | "Float32" => 4,
-        "Int64" | "UInt64" | "Float64" => 8,
-        _ => return None,
-    })
-}
-
 /// Decodes array `a`, which must hold exactly `values` numbers (tuples × components).
 fn decode(ctx: &Ctx, a: &ArrayDesc, values: usize) -> Result<Vec<f64>> {
     let file = ctx.file;
@@ -482,7 +473,7 @@ fn decode(ctx: &Ctx, a: &ArrayDesc, values: usize) -> Result<Vec<f64>> {
         }
         ArrayFormat::Binary => {
             let bytes = b64(&a.text).map_err(&err)?;
-            block(ctx, &bytes, values * size).map_err(&err)?
+            block(ctx.fmt, &bytes, values * size).map_err(&err)?
         }
         ArrayFormat::Appended => {
             if a.offset > ctx.appended.len() {
@@ -501,134 +492,14 @@ fn decode(ctx: &Ctx, a: &ArrayDesc, values: usize) -> Result<Vec<f64>> {
                     .unwrap_or(ctx.appended.len())
                     .min(ctx.appended.len());
                 let bytes = b64(&ctx.appended[a.offset..end]).map_err(&err)?;
-                block(ctx, &bytes, values * size).map_err(&err)?
+                block(ctx.fmt, &bytes, values * size).map_err(&err)?
             } else {
-                block(ctx, &ctx.appended[a.offset..], values * size)
+                block(ctx.fmt, &ctx.appended[a.offset..], values * size)
                     .map_err(|m| err(format!("at appended offset {}: {m}", a.offset)))?
             }
         }
     };
-    Ok(to_f64(&raw, &a.ty, size, ctx.big_endian))
-}
-
-/// Reads one binary block (header + data, optionally zlib-compressed in blocks) that must
-/// decode to exactly `want` bytes; trailing bytes after it are ignored.
-fn block(ctx: &Ctx, b: &[u8], want: usize) -> std::result::Result<Vec<u8>, String> {
-    let hs = if ctx.header64 { 8 } else { 4 };
-    let word = |i: usize| -> std::result::Result<u64, String> {
-        let s = b
-            .get(i * hs..(i + 1) * hs)
-            .ok_or_else(|| format!("header truncated ({} bytes, word {i} needed)", b.len()))?;
-        let mut v = [0u8; 8];
-        if ctx.big_endian {
-            v[8 - hs..].copy_from_slice(s);
-            Ok(u64::from_be_bytes(v))
-        } else {
-            v[..hs].copy_from_slice(s);
-            Ok(u64::from_le_bytes(v))
-        }
-    };
-    if !ctx.compressed {
-        let n = word(0)?;
-        if n != want as u64 {
-            return Err(format!("header says {n} bytes, expected {want}"));
-        }
-        return b.get(hs..hs + want).map(<[u8]>::to_vec).ok_or_else(|| {
-            format!(
-                "data truncated: {} of {want} bytes present",
-                b.len().saturating_sub(hs)
-            )
-        });
-    }
-    let nb = word(0)?;
-    let bs = word(1)?;
-    let last = word(2)?;
-    let total = match nb {
-        0 => 0,
-        n => (n - 1)
-            .saturating_mul(bs)
-            .saturating_add(if last > 0 { last } else { bs }),
-    };
-    if total != want as u64 {
-        return Err(format!(
-            "compressed header says {nb} blocks of {bs} bytes (last {last}) = {total} bytes, expected {want}"
-        ));
-    }
-    let nb = nb as usize; // bounded: total == want, so nb <= want + 1
-    let mut pos = (3 + nb) * hs;
-    let mut out = Vec::with_capacity(want);
-    for i in 0..nb {
-        let cs = word(3 + i)? as usize;
-        let src = b
-            .get(pos..pos.saturating_add(cs))
-            .ok_or_else(|| format!("compressed block {i} truncated"))?;
-        let expect = if i + 1 == nb && last > 0 { last } else { bs } as usize;
-        let before = out.len();
-        flate2::read::ZlibDecoder::new(src)
-            .take(expect as u64)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("zlib block {i}: {e}"))?;
-        if out.len() - before != expect {
-            return Err(format!(
-                "zlib block {i} inflates to {} bytes, expected {expect}",
-                out.len() - before
-            ));
-        }
-        pos += cs;
-    }
-    Ok(out)
-}
-
-/// Decodes base64 that may be several separately padded chunks back to back (VTK encodes the
-/// compression header and the data separately); whitespace is ignored.
-fn b64(text: &[u8]) -> std::result::Result<Vec<u8>, String> {
-    let clean: Vec<u8> = text
-        .iter()
-        .copied()
-        .filter(|c| !c.is_ascii_whitespace())
-        .collect();
-    if !clean.len().is_multiple_of(4) {
-        return Err(format!(
-            "base64 text of {} characters is not a multiple of 4",
-            clean.len()
-        ));
-    }
-    let eng = base64::engine::general_purpose::STANDARD;
-    let mut out = Vec::with_capacity(clean.len() / 4 * 3);
-    let mut start = 0;
-    for g in (0..clean.len()).step_by(4) {
-        if clean[g..g + 4].contains(&b'=') || g + 4 == clean.len() {
-            eng.decode_vec(&clean[start..g + 4], &mut out)
-                .map_err(|e| format!("bad base64: {e}"))?;
-            start = g + 4;
-        }
-    }
-    Ok(out)
-}
-
-fn to_f64(raw: &[u8], ty: &str, size: usize, big: bool) -> Vec<f64> {
-    raw.chunks_exact(size)
-        .map(|c| {
-            let mut b = [0u8; 8];
-            b[..size].copy_from_slice(c);
-            if big {
-                b[..size].reverse();
-            }
-            // `b` now holds the value little-endian in its first `size` bytes.
-            match ty {
-                "Int8" | "Char" => b[0] as i8 as f64,
-                "UInt8" => b[0] as f64,
-                "Int16" => i16::from_le_bytes([b[0], b[1]]) as f64,
-                "UInt16" => u16::from_le_bytes([b[0], b[1]]) as f64,
-                "Int32" => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                "UInt32" => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                "Float32" => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                "Int64" => i64::from_le_bytes(b) as f64,
-                "UInt64" => u64::from_le_bytes(b) as f64,
-                _ => f64::from_le_bytes(b),
-            }
-        })
-        .collect()
+    Ok(to_f64(&raw, &a.ty, size, ctx.fmt.big_endian))
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {

@@ -28,6 +28,12 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Output piped into `head` must end quietly, as for any Unix tool, not with a panic.
+    #[cfg(unix)]
+    // SAFETY: restoring the default SIGPIPE disposition at start-up, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo::run(&a),

@@ -1,0 +1,328 @@
+//! Makes every labeled crown of the IOS jaw an open disk: one component, manifold, one boundary
+//! loop. Pinch vertices and stray islands are relabeled gingiva; small gingiva islands enclosed
+//! by a crown are relabeled to that crown. Monotone, so it terminates.
+
+use crate::mesh::{TriMesh, boundary_loops, connected_components};
+use std::collections::BTreeSet;
+
+/// Sorted undirected edge → faces table of a mesh.
+struct EdgeFaces {
+    keyed: Vec<(u32, u32, u32)>,
+}
+
+impl EdgeFaces {
+    fn new(mesh: &TriMesh) -> Self {
+        let mut keyed = Vec::with_capacity(mesh.triangles.len() * 3);
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                keyed.push((a.min(b), a.max(b), f as u32));
+            }
+        }
+        keyed.sort_unstable();
+        EdgeFaces { keyed }
+    }
+
+    fn faces(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
+        let key = (a.min(b), a.max(b));
+        let start = self.keyed.partition_point(|e| (e.0, e.1) < key);
+        self.keyed[start..]
+            .iter()
+            .take_while(move |e| (e.0, e.1) == key)
+            .map(|e| e.2)
+    }
+}
+
+/// Vertices of `sub` whose incident faces form more than one fan.
+fn pinches(sub: &TriMesh) -> Vec<u32> {
+    let mut corners: Vec<(u32, u32, u32, u32)> = Vec::new();
+    for (f, t) in sub.triangles.iter().enumerate() {
+        for k in 0..3 {
+            corners.push((t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]));
+        }
+    }
+    corners.sort_unstable();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < corners.len() {
+        let v = corners[i].0;
+        let mut j = i;
+        while j < corners.len() && corners[j].0 == v {
+            j += 1;
+        }
+        let fan = &corners[i..j];
+        let m = fan.len();
+        let mut parent: Vec<usize> = (0..m).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        let mut nb: Vec<(u32, usize)> = Vec::with_capacity(2 * m);
+        for (idx, c) in fan.iter().enumerate() {
+            nb.push((c.2, idx));
+            nb.push((c.3, idx));
+        }
+        nb.sort_unstable();
+        for w in nb.windows(2) {
+            if w[0].0 == w[1].0 {
+                let (a, b) = (find(&mut parent, w[0].1), find(&mut parent, w[1].1));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+        let roots = (0..m).filter(|&x| find(&mut parent, x) == x).count();
+        if roots > 1 {
+            out.push(v);
+        }
+        i = j;
+    }
+    out
+}
+
+/// Repairs `labels` (per vertex, 0 = gingiva) so that each crown label's faces form one open
+/// disk; `allow_holes` keeps inner loops that are holes of the mesh itself. Returns the number
+/// of relabeled vertices.
+pub fn make_crowns_disks(mesh: &TriMesh, labels: &mut [i32], allow_holes: bool) -> usize {
+    let ef = EdgeFaces::new(mesh);
+    let n = mesh.positions.len();
+    let mut local = vec![u32::MAX; n];
+    let mut changed_total = 0;
+    let mut dirty: Option<BTreeSet<i32>> = None;
+    for _round in 0..40 {
+        let mut changed = 0;
+        let mut now_dirty: BTreeSet<i32> = BTreeSet::new();
+        let mut by_label: std::collections::BTreeMap<i32, Vec<u32>> =
+            std::collections::BTreeMap::new();
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            let l = labels[t[0] as usize];
+            if l != 0 && labels[t[1] as usize] == l && labels[t[2] as usize] == l {
+                by_label.entry(l).or_default().push(f as u32);
+            }
+        }
+        // Labeled vertices in no crown face go to the gingiva.
+        let mut in_face = vec![false; n];
+        for faces in by_label.values() {
+            for &f in faces {
+                for &v in &mesh.triangles[f as usize] {
+                    in_face[v as usize] = true;
+                }
+            }
+        }
+        for v in 0..n {
+            if labels[v] != 0 && !in_face[v] {
+                now_dirty.insert(labels[v]);
+                labels[v] = 0;
+                changed += 1;
+            }
+        }
+        for (&lab, faces) in &by_label {
+            if dirty.as_ref().is_some_and(|d| !d.contains(&lab)) {
+                continue;
+            }
+            let before = changed;
+            // Local submesh of this crown.
+            let mut globals: Vec<u32> = Vec::new();
+            let mut tris = Vec::with_capacity(faces.len());
+            for &f in faces {
+                let t = mesh.triangles[f as usize];
+                let mut lt = [0u32; 3];
+                for (k, &v) in t.iter().enumerate() {
+                    if local[v as usize] == u32::MAX {
+                        local[v as usize] = globals.len() as u32;
+                        globals.push(v);
+                    }
+                    lt[k] = local[v as usize];
+                }
+                tris.push(lt);
+            }
+            for &g in &globals {
+                local[g as usize] = u32::MAX;
+            }
+            let sub = TriMesh::new(
+                globals
+                    .iter()
+                    .map(|&g| mesh.positions[g as usize])
+                    .collect(),
+                tris,
+            );
+            let pin = pinches(&sub);
+            if !pin.is_empty() {
+                for v in pin {
+                    labels[globals[v as usize] as usize] = 0;
+                    changed += 1;
+                }
+                now_dirty.insert(lab);
+                continue;
+            }
+            let (ids, count) = connected_components(&sub);
+            if count > 1 {
+                let mut sizes = vec![0usize; count];
+                for &c in &ids {
+                    sizes[c as usize] += 1;
+                }
+                let best = (0..count)
+                    .max_by_key(|&c| (sizes[c], usize::MAX - c))
+                    .unwrap_or(0) as u32;
+                let mut keep = vec![false; globals.len()];
+                for (k, &c) in ids.iter().enumerate() {
+                    if c == best {
+                        for &v in &sub.triangles[k] {
+                            keep[v as usize] = true;
+                        }
+                    }
+                }
+                for (lv, &g) in globals.iter().enumerate() {
+                    if !keep[lv] {
+                        labels[g as usize] = 0;
+                        changed += 1;
+                    }
+                }
+                now_dirty.insert(lab);
+                continue;
+            }
+            let loops: Vec<Vec<u32>> = boundary_loops(&sub)
+                .into_iter()
+                .map(|lp| lp.into_iter().map(|v| globals[v as usize]).collect())
+                .collect();
+            let is_crown_face = |labels: &[i32], f: usize| {
+                mesh.triangles[f].iter().all(|&v| labels[v as usize] == lab)
+            };
+            for lp in loops.iter().skip(1) {
+                // The faces across this loop (not crown faces): flood them.
+                let mut seeds = Vec::new();
+                let mut mesh_hole = false;
+                for w in 0..lp.len() {
+                    let (a, b) = (lp[w], lp[(w + 1) % lp.len()]);
+                    let mut any = false;
+                    for f in ef.faces(a, b) {
+                        if !is_crown_face(labels, f as usize) {
+                            seeds.push(f);
+                            any = true;
+                        }
+                    }
+                    if !any {
+                        mesh_hole = true;
+                    }
+                }
+                if mesh_hole && allow_holes {
+                    continue;
+                }
+                let mut seen: BTreeSet<u32> = seeds.iter().copied().collect();
+                let mut stack = seeds;
+                let mut ok = !mesh_hole;
+                while let Some(f) = stack.pop() {
+                    if seen.len() > 4000 {
+                        ok = false;
+                        break;
+                    }
+                    let t = mesh.triangles[f as usize];
+                    if t.iter()
+                        .any(|&v| labels[v as usize] != lab && labels[v as usize] != 0)
+                    {
+                        ok = false;
+                        break;
+                    }
+                    for k in 0..3 {
+                        let (a, b) = (t[k], t[(k + 1) % 3]);
+                        let mut cnt = 0;
+                        for g in ef.faces(a, b) {
+                            cnt += 1;
+                            if g != f && !is_crown_face(labels, g as usize) && seen.insert(g) {
+                                stack.push(g);
+                            }
+                        }
+                        if cnt < 2 {
+                            ok = false; // reached the mesh boundary
+                        }
+                    }
+                }
+                if ok {
+                    for &f in &seen {
+                        for &v in &mesh.triangles[f as usize] {
+                            if labels[v as usize] != lab {
+                                labels[v as usize] = lab;
+                                changed += 1;
+                            }
+                        }
+                    }
+                } else {
+                    // Cannot fill: cut the crown open to this loop by relabeling a path of
+                    // crown vertices between it and the outer loop as gingiva.
+                    changed += cut_to_outer(&sub, &globals, labels, lab, lp, &loops[0]);
+                }
+                break; // one inner loop per round: labels changed under the others
+            }
+            if changed > before {
+                now_dirty.insert(lab);
+            }
+        }
+        changed_total += changed;
+        if changed == 0 {
+            break;
+        }
+        dirty = Some(now_dirty);
+    }
+    changed_total
+}
+
+/// Relabels to gingiva the vertices of a shortest edge path (by hops, within the crown `sub`,
+/// whose vertex `i` is mesh vertex `globals[i]`) from loop `inner` to loop `outer` (mesh
+/// vertex ids), which merges the two boundary loops into one.
+fn cut_to_outer(
+    sub: &TriMesh,
+    globals: &[u32],
+    labels: &mut [i32],
+    lab: i32,
+    inner: &[u32],
+    outer: &[u32],
+) -> usize {
+    let n = sub.positions.len();
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in &sub.triangles {
+        for k in 0..3 {
+            adj[t[k] as usize].push(t[(k + 1) % 3]);
+            adj[t[(k + 1) % 3] as usize].push(t[k]);
+        }
+    }
+    for a in &mut adj {
+        a.sort_unstable();
+        a.dedup();
+    }
+    let is_outer: BTreeSet<u32> = outer.iter().copied().collect();
+    let is_inner: BTreeSet<u32> = inner.iter().copied().collect();
+    let mut prev = vec![u32::MAX; n];
+    let mut queue = std::collections::VecDeque::new();
+    for (lv, &g) in globals.iter().enumerate() {
+        if is_inner.contains(&g) {
+            prev[lv] = lv as u32;
+            queue.push_back(lv as u32);
+        }
+    }
+    while let Some(v) = queue.pop_front() {
+        if is_outer.contains(&globals[v as usize]) {
+            let mut count = 0;
+            let mut c = v;
+            loop {
+                let g = globals[c as usize] as usize;
+                if labels[g] == lab {
+                    labels[g] = 0;
+                    count += 1;
+                }
+                if prev[c as usize] == c {
+                    break;
+                }
+                c = prev[c as usize];
+            }
+            return count;
+        }
+        for &w in &adj[v as usize] {
+            if prev[w as usize] == u32::MAX {
+                prev[w as usize] = v;
+                queue.push_back(w);
+            }
+        }
+    }
+    0
+}
