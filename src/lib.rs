@@ -12,10 +12,12 @@
 
 pub mod arch;
 pub mod error;
+pub mod eval;
 pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod phantom;
+pub mod register;
 pub mod units;
 
 #[allow(unsafe_code)]

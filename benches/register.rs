@@ -1,0 +1,33 @@
+//! Full-jaw registration (14 teeth, realistic phantom sizes): default and paper presets.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use toothfuse::eval::phantom_inputs;
+use toothfuse::phantom::{Phantom, PhantomOptions};
+use toothfuse::register::{RegisterOptions, register};
+
+fn bench(c: &mut Criterion) {
+    let p = Phantom::generate(&PhantomOptions::default()).expect("phantom");
+    let (ios, cbct) = phantom_inputs(&p).expect("inputs");
+    let points: usize = ios.values().map(|m| m.positions.len()).sum();
+    eprintln!(
+        "{} teeth, {} IOS vertices, {} CBCT vertices",
+        ios.len(),
+        points,
+        cbct.values().map(|m| m.positions.len()).sum::<usize>()
+    );
+    let mut g = c.benchmark_group("register");
+    g.sample_size(10);
+    let def = RegisterOptions::default();
+    g.bench_function("default_14_teeth", |b| {
+        b.iter(|| register(black_box(&ios), black_box(&cbct), &def).expect("register"))
+    });
+    let paper = RegisterOptions::paper();
+    g.bench_function("paper_14_teeth", |b| {
+        b.iter(|| register(black_box(&ios), black_box(&cbct), &paper).expect("register"))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

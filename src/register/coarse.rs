@@ -1,0 +1,106 @@
+//! Coarse registration (CR), paper eq. (2): one rigid transform for all teeth, CBCT as source and
+//! IOS as target; for each IOS point `y ∈ Y_i` the closest CBCT point `Corr(y)` of the same tooth,
+//! residual `(R(Corr(y)) − y) · n_Corr(y)` with the CBCT normal.
+
+use super::icp::{Normal7, Pair, step_about, weights};
+use super::{Correspondence, StageOptions, StageStats, ToothData};
+use crate::Rigid;
+use glam::DVec3;
+use std::collections::BTreeMap;
+
+/// Result of the coarse stage.
+pub(crate) struct CoarseResult {
+    /// CBCT → IOS for every tooth.
+    pub transform: Rigid,
+    /// Estimated CBCT surface offset along its normal (mm; 0 unless estimated).
+    pub offset: f64,
+    /// Iterations and convergence.
+    pub stats: StageStats,
+}
+
+/// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS).
+fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, full: bool, o: &StageOptions) -> Vec<Pair> {
+    let inv = t.inverse();
+    let mut out = Vec::new();
+    for d in teeth.values() {
+        for &k in d.ios_indices(full) {
+            let y = d.ios_points[k];
+            let sp = match o.correspondence {
+                Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
+                Correspondence::ClosestPoint => d.cbct.closest_point(inv.apply(y)),
+            };
+            out.push(Pair {
+                p: t.apply(sp.point),
+                q: y,
+                n: t.apply_vector(sp.normal),
+                n_other: d.ios_normals[k],
+            });
+        }
+    }
+    out
+}
+
+/// Runs eq. (2) from the initial transform `init` (CBCT → IOS).
+pub(crate) fn coarse(
+    teeth: &BTreeMap<u8, ToothData>,
+    init: Rigid,
+    o: &StageOptions,
+) -> CoarseResult {
+    let mut t = init;
+    let mut offset = 0.0;
+    let center = {
+        let (s, n) = teeth.values().fold((DVec3::ZERO, 0usize), |(s, n), d| {
+            (
+                s + d.ios_centroid * d.ios_points.len() as f64,
+                n + d.ios_points.len(),
+            )
+        });
+        s / n.max(1) as f64
+    };
+    let radius = teeth
+        .values()
+        .flat_map(|d| d.ios_points.iter())
+        .fold(0.0f64, |r, p| r.max((*p - center).length()));
+    let mut stats = StageStats::default();
+    let mut prev_rms = f64::INFINITY;
+    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
+    for &full in phases {
+        let cap = if full && o.subsample {
+            o.full_resolution_iterations
+        } else {
+            o.convergence.max_iterations
+        };
+        let mut converged = false;
+        for _ in 0..cap {
+            let pr = pairs(teeth, &t, full, o);
+            let w = weights(&pr, offset, &o.weights);
+            let mut ne = Normal7::new();
+            ne.add_pairs(&pr, &w, center, offset);
+            stats.iterations += 1;
+            let Some((rw, rt, db)) = ne.solve(o.estimate_offset) else {
+                break;
+            };
+            t = step_about(rw, rt, center).compose(&t).orthonormalized();
+            offset += db;
+            let rms = (ne.rr / ne.wsum.max(1e-300)).sqrt();
+            stats.rms_mm = rms;
+            stats.inlier_fraction = ne.wsum / pr.len().max(1) as f64;
+            if o.convergence.step_small(rw, rt, radius) || o.convergence.rms_stalled(prev_rms, rms)
+            {
+                converged = true;
+                break;
+            }
+            prev_rms = rms;
+        }
+        // The full-resolution pass after a subsampled one is a fixed refinement: convergence is
+        // judged on the pass that ran to its threshold.
+        if !full || !o.subsample {
+            stats.converged = converged;
+        }
+    }
+    CoarseResult {
+        transform: t,
+        offset,
+        stats,
+    }
+}

@@ -1,0 +1,184 @@
+//! Smooth-drift fine registration (beyond the paper; replaces eq. (3) in the default preset).
+//!
+//! IOS stitching drift accumulates smoothly along the arch and the teeth are rigid, whereas
+//! fitting each crown alone to its (distorted) CBCT crown rotates the tooth and throws the root
+//! apex off. So all per-tooth corrections are solved *jointly*: the eq. (3) point-to-plane data
+//! term of every tooth (IOS source, CBCT target), each normalised to a mean, plus a penalty on the
+//! difference of neighbouring teeth's corrections, measured as the relative motion at the point
+//! between them (`smooth_mm` weights the translation part, `smooth_rotation` the rotation part
+//! scaled by a lever of `lever_mm`), and a penalty on each tooth's rotation away from the coarse
+//! solution (`rotation_prior`). `smooth → ∞` gives one rigid transform (eq. 2); `smooth = 0`
+//! gives independent per-tooth fits.
+
+use super::fine::group_pairs;
+use super::icp::{Normal7, step_about, weights};
+use super::{DriftOptions, StageOptions, StageStats, ToothData};
+use crate::Rigid;
+use glam::DVec3;
+use nalgebra::{DMatrix, DVector, SMatrix};
+use std::collections::BTreeMap;
+
+/// Cross-product matrix `[v]×` (so `[v]× w = v × w`).
+fn skew(v: DVec3) -> SMatrix<f64, 3, 3> {
+    SMatrix::<f64, 3, 3>::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Joint smooth-drift registration. `order`: registered teeth in arch order; `coarse`: CBCT →
+/// IOS after CR. Returns per tooth the IOS → CBCT mapping and per-tooth stats.
+pub(crate) fn fine_smooth(
+    teeth: &BTreeMap<u8, ToothData>,
+    order: &[u8],
+    coarse: &Rigid,
+    offset0: f64,
+    o: &StageOptions,
+    d: &DriftOptions,
+) -> (BTreeMap<u8, Rigid>, BTreeMap<u8, StageStats>) {
+    let n = order.len();
+    let inv = coarse.inverse();
+    let cen: Vec<DVec3> = order
+        .iter()
+        .map(|f| inv.apply(teeth[f].ios_centroid))
+        .collect();
+    let center = cen.iter().fold(DVec3::ZERO, |a, p| a + *p) / n.max(1) as f64;
+    // Accumulated twists about `center` (CBCT frame), one per tooth, and per-tooth offsets.
+    let mut x = vec![[0.0f64; 6]; n];
+    let mut offs = vec![offset0; n];
+    let to_rigid = |xi: &[f64; 6]| {
+        step_about(
+            DVec3::new(xi[0], xi[1], xi[2]),
+            DVec3::new(xi[3], xi[4], xi[5]),
+            center,
+        )
+    };
+    let mut stats: BTreeMap<u8, StageStats> =
+        order.iter().map(|&f| (f, StageStats::default())).collect();
+    let mut ios_to_cbct: BTreeMap<u8, Rigid> = order.iter().map(|&f| (f, inv)).collect();
+    // Smoothness blocks M (6×6) per neighbouring pair: M e = [L·Δw ; Δw × (m − c) + Δt] scaled.
+    let pair_m: Vec<SMatrix<f64, 6, 6>> = (0..n.saturating_sub(1))
+        .map(|k| {
+            let m = 0.5 * (cen[k] + cen[k + 1]) - center;
+            let mut mm = SMatrix::<f64, 6, 6>::zeros();
+            let sr = d.smooth_rotation.sqrt() * d.lever_mm;
+            let st = d.smooth_mm.sqrt();
+            for i in 0..3 {
+                mm[(i, i)] = sr;
+                mm[(3 + i, 3 + i)] = st;
+            }
+            let s = -skew(m) * st;
+            mm.fixed_view_mut::<3, 3>(3, 0).copy_from(&s);
+            mm
+        })
+        .collect();
+    let radius = order
+        .iter()
+        .map(|f| teeth[f].ios_radius)
+        .fold(0.0, f64::max);
+    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
+    let mut iterations = 0usize;
+    let mut converged = false;
+    for &full in phases {
+        let cap = if full && o.subsample {
+            o.full_resolution_iterations
+        } else {
+            o.convergence.max_iterations
+        };
+        let mut phase_converged = false;
+        for _ in 0..cap {
+            for (k, f) in order.iter().enumerate() {
+                ios_to_cbct.insert(*f, to_rigid(&x[k]).compose(&inv));
+            }
+            let dim = 7 * n;
+            let mut a = DMatrix::<f64>::zeros(dim, dim);
+            let mut g = DVector::<f64>::zeros(dim);
+            for (k, f) in order.iter().enumerate() {
+                let pr = group_pairs(
+                    teeth,
+                    std::slice::from_ref(f),
+                    &ios_to_cbct,
+                    full,
+                    o,
+                    o.source_normals,
+                );
+                let w = weights(&pr, -offs[k], &o.weights);
+                let mut ne = Normal7::new();
+                // Linearised about the current pose: the step is applied after the current
+                // correction, and added to the accumulated twist (small-angle composition).
+                ne.add_pairs(&pr, &w, center, -offs[k]);
+                let s = 1.0 / ne.wsum.max(1e-12);
+                let st = stats.get_mut(f).expect("tooth in order");
+                st.rms_mm = (ne.rr * s).sqrt();
+                st.inlier_fraction = ne.wsum / pr.len().max(1) as f64;
+                for i in 0..7 {
+                    g[7 * k + i] += ne.g[i] * s;
+                    for j in 0..7 {
+                        a[(7 * k + i, 7 * k + j)] += ne.a[(i, j)] * s;
+                    }
+                }
+                if !o.estimate_offset {
+                    for i in 0..7 {
+                        a[(7 * k + 6, 7 * k + i)] = 0.0;
+                        a[(7 * k + i, 7 * k + 6)] = 0.0;
+                    }
+                    a[(7 * k + 6, 7 * k + 6)] = 1.0;
+                    g[7 * k + 6] = 0.0;
+                }
+                // Rotation prior: κ L² ‖w_k‖² on the accumulated rotation.
+                let kr = d.rotation_prior * d.lever_mm * d.lever_mm;
+                for i in 0..3 {
+                    a[(7 * k + i, 7 * k + i)] += kr;
+                    g[7 * k + i] += kr * x[k][i];
+                }
+            }
+            for (k, mm) in pair_m.iter().enumerate() {
+                let q = mm.transpose() * mm;
+                let e: SMatrix<f64, 6, 1> = SMatrix::from_fn(|i, _| x[k][i] - x[k + 1][i]);
+                let qe = q * e;
+                for i in 0..6 {
+                    g[7 * k + i] += qe[i];
+                    g[7 * (k + 1) + i] -= qe[i];
+                    for j in 0..6 {
+                        a[(7 * k + i, 7 * k + j)] += q[(i, j)];
+                        a[(7 * (k + 1) + i, 7 * (k + 1) + j)] += q[(i, j)];
+                        a[(7 * k + i, 7 * (k + 1) + j)] -= q[(i, j)];
+                        a[(7 * (k + 1) + i, 7 * k + j)] -= q[(i, j)];
+                    }
+                }
+            }
+            let tr: f64 = (0..dim).map(|i| a[(i, i)]).sum::<f64>() / dim as f64;
+            for i in 0..dim {
+                a[(i, i)] += 1e-9 * tr;
+            }
+            iterations += 1;
+            let Some(ch) = a.cholesky() else {
+                break;
+            };
+            let step = ch.solve(&(-g));
+            let mut max_move = 0.0f64;
+            for k in 0..n {
+                let w = DVec3::new(step[7 * k], step[7 * k + 1], step[7 * k + 2]);
+                let t = DVec3::new(step[7 * k + 3], step[7 * k + 4], step[7 * k + 5]);
+                let lever = (cen[k] - center).length() + radius;
+                max_move = max_move.max(t.length() + w.length() * lever);
+                for i in 0..6 {
+                    x[k][i] += step[7 * k + i];
+                }
+                offs[k] -= step[7 * k + 6];
+            }
+            if max_move <= o.convergence.step_mm {
+                phase_converged = true;
+                break;
+            }
+        }
+        // The full-resolution pass after a subsampled one is a fixed refinement.
+        if !full || !o.subsample {
+            converged = phase_converged;
+        }
+    }
+    for (k, f) in order.iter().enumerate() {
+        ios_to_cbct.insert(*f, to_rigid(&x[k]).compose(&inv).orthonormalized());
+        let st = stats.get_mut(f).expect("tooth in order");
+        st.iterations = iterations;
+        st.converged = converged;
+    }
+    (ios_to_cbct, stats)
+}
