@@ -382,6 +382,15 @@ pub fn register(
                 opts.guard.max_sd_mm
             ));
         }
+        let gap = top_gap(d, &m);
+        if gap.abs() > opts.guard.max_top_gap_mm {
+            warnings.push(format!(
+                "the IOS crown top lies {:.3} mm {} the CBCT crown top: the crown may have slid \
+                 along the tooth",
+                gap.abs(),
+                if gap < 0.0 { "below" } else { "above" }
+            ));
+        }
         if inl < opts.guard.min_inlier_fraction {
             warnings.push(format!(
                 "only {:.0}% of the IOS crown lies within {:.2} mm of the CBCT tooth",
@@ -437,6 +446,30 @@ pub fn register(
         sd_mm: sd_sum / sd_n.max(1) as f64,
         timing,
     })
+}
+
+/// Signed gap (mm) between the occlusal tops of the IOS crown (mapped by `ios_to_cbct`) and the
+/// CBCT tooth, along the direction from the CBCT tooth centroid to the crown centroid.
+fn top_gap(d: &ToothData, ios_to_cbct: &Rigid) -> f64 {
+    let cm = d.cbct.mesh();
+    let Some(cc) = crate::geom::centroid(&cm.positions) else {
+        return 0.0;
+    };
+    let dir = (ios_to_cbct.apply(d.ios_centroid) - cc).normalize_or_zero();
+    if dir == DVec3::ZERO {
+        return 0.0;
+    }
+    let top_c = cm
+        .positions
+        .iter()
+        .map(|p| p.dot(dir))
+        .fold(f64::MIN, f64::max);
+    let top_i = d
+        .all
+        .iter()
+        .map(|&k| ios_to_cbct.apply(d.ios_points[k]).dot(dir))
+        .fold(f64::MIN, f64::max);
+    top_i - top_c
 }
 
 fn ms(t: Instant) -> f64 {

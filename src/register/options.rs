@@ -163,6 +163,10 @@ pub struct GuardOptions {
     pub max_sd_mm: f64,
     /// Warn when fewer IOS points than this fraction lie within `inlier_distance_mm`.
     pub min_inlier_fraction: f64,
+    /// Warn when the occlusal tops of the registered IOS crown and of the CBCT tooth differ by
+    /// more than this along the tooth's direction (mm): the crown slid along the tooth, a wrong
+    /// ICP minimum that keeps a small SD.
+    pub max_top_gap_mm: f64,
 }
 
 /// Everything [`super::register`] can be told.
@@ -213,6 +217,7 @@ impl RegisterOptions {
                 flag_correction_mm: 0.5,
                 max_sd_mm: 0.3,
                 min_inlier_fraction: 0.8,
+                max_top_gap_mm: 0.5,
             },
         }
     }
@@ -341,6 +346,7 @@ impl Default for RegisterOptions {
                 flag_correction_mm: 0.5,
                 max_sd_mm: 0.3,
                 min_inlier_fraction: 0.8,
+                max_top_gap_mm: 0.5,
             },
         }
     }
