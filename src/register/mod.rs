@@ -123,7 +123,7 @@ pub struct Registration {
 /// Per-tooth working data.
 pub(crate) struct ToothData {
     pub cbct: SurfaceIndex,
-    pub ios: SurfaceIndex,
+    pub ios_mesh: TriMesh,
     pub ios_points: Vec<DVec3>,
     pub ios_normals: Vec<DVec3>,
     pub ios_centroid: DVec3,
@@ -142,10 +142,27 @@ impl ToothData {
 fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> Result<ToothData> {
     let cbct_idx = SurfaceIndex::new(cbct)
         .map_err(|e| Error::MissingData(format!("CBCT mesh: {e}")).in_tooth(fdi))?;
-    let ios_idx = SurfaceIndex::new(ios)
-        .map_err(|e| Error::MissingData(format!("IOS crown: {e}")).in_tooth(fdi))?;
-    // Only vertices used by a face (loose vertices have no normal).
-    let normals = ios_idx.vertex_normals().to_vec();
+    if ios.triangles.is_empty() {
+        return Err(
+            Error::MissingData("IOS crown: empty mesh (no triangles)".into()).in_tooth(fdi),
+        );
+    }
+    if let Some(v) = ios.positions.iter().position(|p| !p.is_finite()) {
+        return Err(Error::NonFinite { vertex: v }.in_tooth(fdi));
+    }
+    if let Some((f, &bad)) = ios.triangles.iter().enumerate().find_map(|(f, t)| {
+        t.iter()
+            .find(|&&v| v as usize >= ios.positions.len())
+            .map(|b| (f, b))
+    }) {
+        return Err(Error::IndexOutOfBounds {
+            face: f,
+            index: bad,
+            vertex_count: ios.positions.len(),
+        }
+        .in_tooth(fdi));
+    }
+    let normals = ios.vertex_normals();
     let all: Vec<usize> = (0..ios.positions.len())
         .filter(|&k| normals[k] != DVec3::ZERO)
         .collect();
@@ -169,7 +186,7 @@ fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> 
         .fold(0.0, f64::max);
     Ok(ToothData {
         cbct: cbct_idx,
-        ios: ios_idx,
+        ios_mesh: ios.clone(),
         ios_points: ios.positions.clone(),
         ios_normals: normals,
         ios_centroid: c,
@@ -184,10 +201,11 @@ fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> 
 /// area-weighted centroid.
 fn crown_centroids(d: &ToothData, t: &Rigid, radius_mm: f64) -> Option<(DVec3, DVec3)> {
     let m = d.cbct.mesh();
+    let ios = SurfaceIndex::new(&d.ios_mesh).ok()?;
     let near: Vec<bool> = m
         .positions
         .iter()
-        .map(|p| d.ios.closest_vertex(t.apply(*p)).distance <= radius_mm)
+        .map(|p| ios.closest_vertex(t.apply(*p)).distance <= radius_mm)
         .collect();
     let mut sum = DVec3::ZERO;
     let mut area = 0.0;
@@ -202,7 +220,7 @@ fn crown_centroids(d: &ToothData, t: &Rigid, radius_mm: f64) -> Option<(DVec3, D
     if area <= 0.0 {
         return None;
     }
-    Some((sum / area, centroid::mesh_centroid(d.ios.mesh(), true)?))
+    Some((sum / area, centroid::mesh_centroid(&d.ios_mesh, true)?))
 }
 
 /// Registers CBCT teeth to IOS crowns (paper section 2.2 and the options beyond it).
@@ -270,7 +288,7 @@ pub fn register(
                 .collect();
             let ic: BTreeMap<u8, DVec3> = teeth
                 .iter()
-                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(d.ios.mesh(), area)?)))
+                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(&d.ios_mesh, area)?)))
                 .collect();
             let mut t = centroid::centroid_alignment(&cc, &ic)?;
             if let CentroidMode::CrownOnly { radius_mm, passes } = opts.centroid {
