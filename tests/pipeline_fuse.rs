@@ -18,8 +18,11 @@ fn phantom(seed: u64, jaw: Jaw, variant: Variant) -> Phantom {
     .expect("phantom")
 }
 
+/// Report JSON without timing, position bits, triangles, labels, sources.
+type Fingerprint = (String, Vec<[u64; 3]>, Vec<[u32; 3]>, Vec<i32>, Vec<u8>);
+
 /// Everything deterministic of a result (the timing is not).
-fn fingerprint(r: &PipelineResult) -> (String, Vec<[u64; 3]>, Vec<[u32; 3]>, Vec<i32>, Vec<u8>) {
+fn fingerprint(r: &PipelineResult) -> Fingerprint {
     let mut rep = r.report();
     rep.timing_ms.clear();
     (
