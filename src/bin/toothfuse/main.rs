@@ -57,7 +57,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-            eprintln!("toothfuse: error: {}", chain.join(": "));
+            // One line, whatever the underlying parsers put in their messages.
+            let line = chain
+                .join(": ")
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
+            eprintln!("toothfuse: error: {line}");
             ExitCode::FAILURE
         }
     }
