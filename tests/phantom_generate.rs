@@ -7,6 +7,7 @@ use phantom_support::*;
 use std::collections::BTreeMap;
 use std::sync::{Mutex, OnceLock};
 use toothfuse::arch::{Jaw, arch_order};
+use toothfuse::mesh::boundary_loops;
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 
 type Key = (u64, bool, &'static str);
@@ -131,6 +132,29 @@ fn ios_crowns_lie_on_the_drifted_truth() {
         // surface plus ~0.01 mm noise.
         assert!(q90 < 0.05, "crown {fdi}: 90% quantile {q90}");
         assert!(q99 < 0.5, "crown {fdi}: 99% quantile {q99}");
+        // The crown's boundary follows the true margin (up to label bleed and the notches).
+        let lp = &boundary_loops(&crown)[0];
+        let mut md: Vec<f64> = lp
+            .iter()
+            .map(|&v| {
+                let q = back.apply(crown.positions[v as usize]);
+                t.margin
+                    .iter()
+                    .map(|m| (*m - q).length())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        md.sort_by(|a, b| a.total_cmp(b));
+        let median = md[md.len() / 2];
+        assert!(median < 0.5, "crown {fdi}: margin median distance {median}");
+        // The margin is closed, ordered and lies on the true surface.
+        for w in t.margin.windows(2) {
+            assert!((w[1] - w[0]).length() < 1.5, "crown {fdi}: margin step");
+        }
+        assert!(
+            t.margin.iter().all(|m| sd.distance(*m) < 0.05),
+            "crown {fdi}: margin on surface"
+        );
     }
 }
 
@@ -152,7 +176,7 @@ fn cbct_deviates_from_truth_like_real_segmentations() {
                 (0.05..=0.4).contains(&rms),
                 "seed {seed} tooth {fdi}: RMS {rms}"
             );
-            assert!(max < 0.8, "seed {seed} tooth {fdi}: max {max}");
+            assert!(max < 0.95, "seed {seed} tooth {fdi}: max {max}");
             all.extend(d);
         }
         let (rms, _, _) = stats(&all);
@@ -291,4 +315,41 @@ fn generation_is_deterministic() {
     }
     let c = Phantom::generate(&PhantomOptions { seed: 8, ..opts }).unwrap();
     assert_ne!(bits(&a.ios.mesh), bits(&c.ios.mesh));
+}
+
+#[test]
+fn optional_holes_stay_inside_single_component_crowns() {
+    let mut opts = PhantomOptions {
+        seed: 9,
+        jaw: Jaw::Lower,
+        variant: Variant::PartialArch,
+        ..Default::default()
+    };
+    opts.realism.ios.holes = 4;
+    let p = Phantom::generate(&opts).unwrap();
+    let crowns = p.ios_crowns();
+    let mut loops = 0;
+    for (fdi, c) in &crowns {
+        let r = c.topology_report();
+        assert_eq!(r.components, 1, "crown {fdi}");
+        assert_eq!(
+            r.non_manifold_edges + r.non_manifold_vertices,
+            0,
+            "crown {fdi}"
+        );
+        loops += r.boundary_loops;
+    }
+    assert!(
+        loops > crowns.len(),
+        "some crowns carry holes: {loops} loops for {} crowns",
+        crowns.len()
+    );
+    let plain = phantom(9, Jaw::Lower, Variant::PartialArch);
+    for (fdi, c) in plain.ios_crowns() {
+        assert_eq!(
+            c.topology_report().boundary_loops,
+            1,
+            "crown {fdi} without holes"
+        );
+    }
 }

@@ -37,8 +37,8 @@ impl Default for CbctRealism {
             voxel: 0.3,
             blur_sigma: 0.4,
             noise: 0.25,
-            threshold_bias: 0.2,
-            distortion: 0.2,
+            threshold_bias: 0.25,
+            distortion: 0.25,
             contact_flattening: true,
             mesh_spacing: 0.3,
         }
@@ -212,7 +212,8 @@ pub fn simulate(
                 let id = g.idx(i, j, k);
                 let own = g.values[id] as f64;
                 let mut o = occ(own);
-                if own < 2.0 {
+                let near = own < 2.0;
+                if near {
                     let p = cbct_to_world.apply(g.point(i, j, k));
                     for nb in neighbours {
                         let d = p - nb.contact;
@@ -222,7 +223,13 @@ pub fn simulate(
                         }
                     }
                 }
-                g.values[id] = (o.min(1.0) + realism.noise * rng.normal()) as f32;
+                // Noise matters only where the blurred image can cross the threshold.
+                let noise = if near && own > -2.0 {
+                    realism.noise * rng.normal()
+                } else {
+                    0.0
+                };
+                g.values[id] = (o.min(1.0) + noise) as f32;
             }
         }
     }

@@ -23,8 +23,7 @@ struct Scenario {
     metal: Option<u8>,
 }
 
-fn scenario(jaw: Jaw, variant: Variant, rng: &mut Rng) -> Scenario {
-    let all = jaw_teeth(jaw);
+fn scenario(all: Vec<u8>, variant: Variant, rng: &mut Rng) -> Result<Scenario> {
     let mut present = all.clone();
     let mut in_ios = all.clone();
     let mut in_cbct = all.clone();
@@ -32,13 +31,23 @@ fn scenario(jaw: Jaw, variant: Variant, rng: &mut Rng) -> Scenario {
     match variant {
         Variant::Full | Variant::HeavyDrift => {}
         Variant::PartialArch => {
-            let n = 3 + rng.below(3);
+            if all.len() < 3 {
+                return Err(crate::Error::InvalidArgument(
+                    "a partial arch needs at least 3 teeth".into(),
+                ));
+            }
+            let n = (3 + rng.below(3)).min(all.len());
             let start = rng.below(all.len() - n + 1);
             present = all[start..start + n].to_vec();
             in_ios = present.clone();
             in_cbct = present.clone();
         }
         Variant::MissingTeeth => {
+            if all.len() < 7 {
+                return Err(crate::Error::InvalidArgument(
+                    "missing-teeth variant needs at least 7 teeth".into(),
+                ));
+            }
             let mut pool: Vec<u8> = all.clone();
             let mut take = |rng: &mut Rng| pool.remove(rng.below(pool.len()));
             let gone = take(rng);
@@ -54,15 +63,20 @@ fn scenario(jaw: Jaw, variant: Variant, rng: &mut Rng) -> Scenario {
                 .copied()
                 .filter(|&t| matches!(tooth_type(t), ToothType::Premolar | ToothType::Molar))
                 .collect();
-            metal = Some(posterior[rng.below(posterior.len())]);
+            let pool = if posterior.is_empty() {
+                &all
+            } else {
+                &posterior
+            };
+            metal = Some(pool[rng.below(pool.len())]);
         }
     }
-    Scenario {
+    Ok(Scenario {
         present,
         in_ios,
         in_cbct,
         metal,
-    }
+    })
 }
 
 /// Parametric teeth: all 14 positions laid out (so gaps stay where teeth are missing), then the
@@ -103,8 +117,32 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
     let jaw = opts.jaw;
     let realism = &opts.realism;
     let mut srng = root.fork(2);
-    let sc = scenario(jaw, opts.variant, &mut srng);
-    let mut teeth: Vec<PlacedTooth> = parametric(jaw, &sc.present, &mut root.fork(1));
+    // Real anatomy is simulated in a canonical jaw frame (occlusal direction ±Z); `canon` maps
+    // the caller's world frame to it (identity for parametric teeth).
+    let (all, real) = match &opts.anatomy {
+        Some(anatomy) => {
+            let r = super::real::prepare(anatomy, jaw, &mut root.fork(7))?;
+            (
+                r.teeth.iter().map(|t| t.shape.fdi).collect::<Vec<u8>>(),
+                Some(r),
+            )
+        }
+        None => (jaw_teeth(jaw), None),
+    };
+    let sc = scenario(all, opts.variant, &mut srng)?;
+    let (mut teeth, canon) = match real {
+        Some(r) => (
+            r.teeth
+                .into_iter()
+                .filter(|t| sc.present.contains(&t.shape.fdi))
+                .collect::<Vec<_>>(),
+            r.canon,
+        ),
+        None => (
+            parametric(jaw, &sc.present, &mut root.fork(1)),
+            crate::Rigid::IDENTITY,
+        ),
+    };
     teeth.sort_by_key(|t| arch_position(t.shape.fdi));
 
     // Drift along the scan path and the two scanner frames.
@@ -159,10 +197,21 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             point: 0.5 * (drift[ios_idx[a]].apply(c) + drift[ios_idx[b]].apply(c)),
         })
         .collect();
+    // True margins (world): where the simulated gingiva meets each IOS tooth; nominal for the
+    // others.
+    let mut margins: BTreeMap<u8, Vec<DVec3>> = BTreeMap::new();
     let ios = if ios_teeth.is_empty() {
         LabeledMesh::default()
     } else {
-        let (mut mesh, labels) = ios::simulate(&ios_teeth, &contacts, occ, &realism.ios, &mut irng);
+        let (mut mesh, labels, ms) =
+            ios::simulate(&ios_teeth, &contacts, occ, &realism.ios, &mut irng);
+        for (k, m) in ms.into_iter().enumerate() {
+            let back = drift[ios_idx[k]].inverse();
+            margins.insert(
+                teeth[ios_idx[k]].shape.fdi,
+                m.into_iter().map(|p| back.apply(p)).collect(),
+            );
+        }
         mesh.transform(&world_to_ios);
         LabeledMesh {
             mesh,
@@ -230,18 +279,28 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
     let mut truth_teeth = BTreeMap::new();
     for (i, t) in teeth.iter().enumerate() {
         let fdi = t.shape.fdi;
-        let surface = true_surface(t, realism.truth_spacing);
+        // Real anatomy: the caller's mesh, where it was; parametric: our mesh of the implicit.
+        let surface = match &opts.anatomy {
+            Some(a) => a[&fdi].clone(),
+            None => true_surface(t, realism.truth_spacing),
+        };
         let cbct_to_ios = world_to_ios
             .compose(&drift[i])
             .compose(&world_to_cbct.inverse());
+        let uncanon = canon.inverse();
         truth_teeth.insert(
             fdi,
             ToothTruth {
                 fdi,
                 surface,
-                margin: t.margin(120),
-                axis: t.axis(),
-                ios_drift: drift[i],
+                margin: margins
+                    .remove(&fdi)
+                    .unwrap_or_else(|| t.margin(120))
+                    .into_iter()
+                    .map(|p| uncanon.apply(p))
+                    .collect(),
+                axis: uncanon.apply_vector(t.axis()),
+                ios_drift: uncanon.compose(&drift[i]).compose(&canon),
                 cbct_to_ios,
                 in_ios: sc.in_ios.contains(&fdi),
                 in_cbct: sc.in_cbct.contains(&fdi),
@@ -255,8 +314,8 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
         cbct,
         truth: Truth {
             teeth: truth_teeth,
-            world_to_ios,
-            world_to_cbct,
+            world_to_ios: world_to_ios.compose(&canon),
+            world_to_cbct: world_to_cbct.compose(&canon),
         },
     })
 }

@@ -92,14 +92,15 @@ impl Field<'_> {
     }
 }
 
-/// Simulates the IOS jaw in the drifted world frame: mesh and per-vertex labels.
+/// Simulates the IOS jaw in the drifted world frame: mesh, per-vertex labels, and per tooth
+/// the true margin where the simulated gingiva meets it (drifted world frame).
 pub fn simulate(
     teeth: &[IosTooth],
     contacts: &[Contact],
     occ: DVec3,
     realism: &IosRealism,
     rng: &mut Rng,
-) -> (TriMesh, Vec<i32>) {
+) -> (TriMesh, Vec<i32>, Vec<Vec<DVec3>>) {
     // Gingiva from the drifted margins.
     let polars: Vec<MarginPolar> = teeth
         .iter()
@@ -246,7 +247,11 @@ pub fn simulate(
             ) * realism.noise;
         }
     }
-    (mesh, labels)
+    let margins = teeth
+        .iter()
+        .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))
+        .collect();
+    (mesh, labels, margins)
 }
 
 fn seg_dist(p: DVec3, a: DVec3, b: DVec3) -> f64 {

@@ -99,6 +99,26 @@ pub struct PlacedTooth {
 }
 
 impl PlacedTooth {
+    /// A tooth at a given pose with its margin parameters (local base height, interproximal
+    /// rise, (wave amplitude, wave phase)).
+    pub fn new(
+        shape: ToothShape,
+        rot: DMat3,
+        center: DVec3,
+        s: f64,
+        margin: (f64, f64, (f64, f64)),
+    ) -> PlacedTooth {
+        PlacedTooth {
+            shape,
+            rot,
+            center,
+            s,
+            margin_base: margin.0,
+            margin_rise: margin.1,
+            margin_wave: margin.2,
+        }
+    }
+
     /// World → local.
     #[inline]
     pub fn to_local(&self, p: DVec3) -> DVec3 {
@@ -162,24 +182,56 @@ impl PlacedTooth {
             + self.margin_wave.0 * (phi + self.margin_wave.1).sin()
     }
 
-    /// The true gingival margin: `n` points on the tooth surface at the margin height, ordered
-    /// by angle, world frame.
+    /// The point of the tooth surface at local height `z` in direction `phi` from the long
+    /// axis (bisection along the ray), world frame.
+    pub fn surface_point(&self, phi: f64, z: f64) -> DVec3 {
+        let dir = DVec3::new(phi.cos(), phi.sin(), 0.0);
+        let (mut lo, mut hi) = (0.0, self.shape.md.max(self.shape.bl));
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if self.shape.eval(DVec3::new(0.0, 0.0, z) + dir * mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        self.to_world(DVec3::new(0.0, 0.0, z) + dir * (0.5 * (lo + hi)))
+    }
+
+    /// The nominal gingival margin: `n` points on the tooth surface at the margin height,
+    /// ordered by angle, world frame.
     pub fn margin(&self, n: usize) -> Vec<DVec3> {
         (0..n)
             .map(|j| {
                 let phi = std::f64::consts::TAU * j as f64 / n as f64;
-                let z = self.margin_height(phi);
-                let dir = DVec3::new(phi.cos(), phi.sin(), 0.0);
-                let (mut lo, mut hi) = (0.0, self.shape.md.max(self.shape.bl));
-                for _ in 0..50 {
+                self.surface_point(phi, self.margin_height(phi))
+            })
+            .collect()
+    }
+
+    /// The gingival margin where a gum surface `gum` (negative below it) actually meets the
+    /// tooth: per angle, the height on the tooth surface where `gum` changes sign (searched
+    /// within ±3 mm of the nominal margin; the nominal point where it does not).
+    pub fn margin_against(&self, n: usize, gum: &dyn Fn(DVec3) -> f64) -> Vec<DVec3> {
+        (0..n)
+            .map(|j| {
+                let phi = std::f64::consts::TAU * j as f64 / n as f64;
+                let m = self.margin_height(phi);
+                let (mut lo, mut hi) = (m - 3.0, m + 3.0);
+                if gum(self.surface_point(phi, lo)) >= 0.0
+                    || gum(self.surface_point(phi, hi)) <= 0.0
+                {
+                    return self.surface_point(phi, m);
+                }
+                for _ in 0..30 {
                     let mid = 0.5 * (lo + hi);
-                    if self.shape.eval(DVec3::new(0.0, 0.0, z) + dir * mid) < 0.0 {
+                    if gum(self.surface_point(phi, mid)) < 0.0 {
                         lo = mid;
                     } else {
                         hi = mid;
                     }
                 }
-                self.to_world(DVec3::new(0.0, 0.0, z) + dir * (0.5 * (lo + hi)))
+                self.surface_point(phi, 0.5 * (lo + hi))
             })
             .collect()
     }

@@ -12,12 +12,12 @@ pub fn mesh_implicit(lo: DVec3, hi: DVec3, h: f64, f: impl Fn(DVec3) -> f64) -> 
     extract_closed(&mut g)
 }
 
-/// Moves `p` onto the zero set of `f` by damped Newton steps (forward-difference gradient),
-/// each step at most `max_step`; returns the input when the field is flat.
+/// Moves `p` (already within a fraction of a grid step) onto the zero set of `f` by one damped
+/// Newton step (forward-difference gradient) of at most `max_step`; returns the input when the field is flat.
 pub fn project(p: DVec3, f: &impl Fn(DVec3) -> f64, max_step: f64) -> DVec3 {
     let mut q = p;
     let e = 1e-5;
-    for _ in 0..2 {
+    for _ in 0..1 {
         let v = f(q);
         if v.abs() < 1e-7 {
             break;

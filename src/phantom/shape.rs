@@ -75,7 +75,9 @@ pub struct ToothShape {
     occl_bl: f64,
     table: f64,
     edge_round: f64,
+    occlusal_min: f64,
     incisal: bool,
+    sampled: Option<Box<super::real::SampledSdf>>,
     cusps: Vec<Cusp>,
     grooves: Vec<Groove>,
     roots: Vec<Root>,
@@ -333,15 +335,54 @@ impl ToothShape {
             occl_bl,
             table,
             edge_round,
+            occlusal_min: table
+                - grooves.iter().map(|g| g.depth).sum::<f64>()
+                - if incisal { 0.8 * 1.7 } else { 0.0 },
             incisal,
+            sampled: None,
             cusps,
             grooves,
             roots,
         }
     }
 
+    /// A real tooth given by a sampled signed distance in its local frame, with its measures.
+    pub fn from_sampled(
+        fdi: u8,
+        sdf: super::real::SampledSdf,
+        md: f64,
+        bl: f64,
+        crown_height: f64,
+        root_length: f64,
+        z_widest: f64,
+    ) -> ToothShape {
+        ToothShape {
+            fdi,
+            md,
+            bl,
+            crown_height,
+            root_length,
+            z_widest,
+            exponent: 2.0,
+            cervical: 1.0,
+            occl_md: 1.0,
+            occl_bl: 1.0,
+            table: crown_height,
+            edge_round: 0.5,
+            occlusal_min: crown_height,
+            incisal: false,
+            sampled: Some(Box::new(sdf)),
+            cusps: Vec::new(),
+            grooves: Vec::new(),
+            roots: Vec::new(),
+        }
+    }
+
     /// Local bounding box (lo, hi) enclosing the surface with a margin.
     pub fn local_box(&self) -> (DVec3, DVec3) {
+        if let Some(s) = &self.sampled {
+            return s.bounds();
+        }
         let (a, b) = (self.md / 2.0, self.bl / 2.0);
         let mut lo = DVec3::new(-a - 0.5, -b - 0.5, -self.root_length - 1.0);
         let mut hi = DVec3::new(a + 0.5, b + 0.5, self.crown_height + 0.8);
@@ -380,19 +421,24 @@ impl ToothShape {
         let a = self.md / 2.0;
         if self.incisal {
             // Incisal edge slightly lower at the corners.
-            t -= 0.8 * (x / a).powi(2);
+            t -= 0.8 * (x / a).powi(2).min(1.7);
         }
         for c in &self.cusps {
             let d2 = (x - c.x).powi(2) + (y - c.y).powi(2);
-            t += c.height * (-d2 / (2.0 * c.radius * c.radius)).exp();
+            let e = d2 / (2.0 * c.radius * c.radius);
+            if e < 14.0 {
+                t += c.height * (-e).exp();
+            }
         }
         for g in &self.grooves {
             let (dx, dy) = (g.b.0 - g.a.0, g.b.1 - g.a.1);
             let len2 = dx * dx + dy * dy;
             let s = (((x - g.a.0) * dx + (y - g.a.1) * dy) / len2).clamp(0.0, 1.0);
             let (px, py) = (g.a.0 + s * dx - x, g.a.1 + s * dy - y);
-            let d2 = px * px + py * py;
-            t -= g.depth * (-d2 / (2.0 * g.width * g.width)).exp();
+            let e = (px * px + py * py) / (2.0 * g.width * g.width);
+            if e < 14.0 {
+                t -= g.depth * (-e).exp();
+            }
         }
         t
     }
@@ -407,15 +453,35 @@ impl ToothShape {
         let n = self.exponent;
         let u = (p.x / a).abs();
         let v = (p.y / b).abs();
-        let norm = (u.powf(n) + v.powf(n)).powf(1.0 / n);
+        // Superellipse norm with one pow: max·(1 + (min/max)^n)^(1/n).
+        let (hi, lo) = if u >= v { (u, v) } else { (v, u) };
+        let norm = if hi > 0.0 {
+            hi * (1.0 + (lo / hi).powf(n)).powf(1.0 / n)
+        } else {
+            0.0
+        };
         let side = (norm - 1.0) * a.min(b);
-        let top = z - self.occlusal(p.x, p.y);
+        // Below the lowest possible occlusal surface by more than the edge rounding, the
+        // occlusal term cannot change the smooth maximum: skip it.
+        let top = if z - self.occlusal_min < side - self.edge_round {
+            f64::NEG_INFINITY
+        } else {
+            z - self.occlusal(p.x, p.y)
+        };
         let bottom = -z - 1.5;
-        smax(smax(side, top, self.edge_round), bottom, 0.5)
+        let crown = if top == f64::NEG_INFINITY {
+            side
+        } else {
+            smax(side, top, self.edge_round)
+        };
+        smax(crown, bottom, 0.5)
     }
 
     /// Signed distance-like value of the whole tooth at local point `p` (negative inside).
     pub fn eval(&self, p: DVec3) -> f64 {
+        if let Some(s) = &self.sampled {
+            return s.eval(p);
+        }
         let mut d = self.crown(p);
         for r in &self.roots {
             d = smin(d, root_sdf(r, p), 1.2);
@@ -429,7 +495,7 @@ fn root_sdf(r: &Root, p: DVec3) -> f64 {
     let len2 = axis.length_squared();
     let t = ((p - r.top).dot(axis) / len2).clamp(0.0, 1.0);
     let c = r.top + axis * t;
-    let rad = r.r_top + (r.r_apex - r.r_top) * t.powf(1.4);
+    let rad = r.r_top + (r.r_apex - r.r_top) * t * t.sqrt();
     let mut d = p - c;
     d.y /= r.aspect;
     d.length() * (1.0f64).min(r.aspect) - rad

@@ -68,52 +68,53 @@ pub fn surface_nets(grid: &Grid) -> TriMesh {
             .map(|x| x as u32)
             .unwrap_or(u32::MAX)
     };
-    // Pass 2: quads around sign-changing edges.
+    // Pass 2: quads around sign-changing edges. Such an edge from sample s along an axis is an
+    // edge of the cell whose low corner is s, and that cell is mixed: visit only mixed cells.
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(positions.len() * 2);
-    for k in 1..nz - 1 {
-        for j in 1..ny - 1 {
-            for i in 1..nx - 1 {
-                let s0 = v[grid.idx(i, j, k)] < 0.0;
-                // Edges along +x, +y, +z from sample (i,j,k).
-                for axis in 0..3 {
-                    let (i1, j1, k1) = match axis {
-                        0 => (i + 1, j, k),
-                        1 => (i, j + 1, k),
-                        _ => (i, j, k + 1),
-                    };
-                    if i1 >= nx || j1 >= ny || k1 >= nz {
-                        continue;
-                    }
-                    let s1 = v[grid.idx(i1, j1, k1)] < 0.0;
-                    if s0 == s1 {
-                        continue;
-                    }
-                    // Cells around the edge, counter-clockwise seen from +axis (b, c cyclic).
-                    let cell = |db: usize, dc: usize| -> (usize, usize, usize) {
-                        match axis {
-                            0 => (i, j - 1 + db, k - 1 + dc),
-                            1 => (i - 1 + dc, j, k - 1 + db),
-                            _ => (i - 1 + db, j - 1 + dc, k),
-                        }
-                    };
-                    let ring = [cell(0, 0), cell(1, 0), cell(1, 1), cell(0, 1)];
-                    let mut q: [u32; 4] =
-                        std::array::from_fn(|n| find(ring[n].0, ring[n].1, ring[n].2));
-                    if q.contains(&u32::MAX) {
-                        continue; // cannot happen on a grid with an outside border
-                    }
-                    if !s0 {
-                        q.reverse();
-                    }
-                    let p: [DVec3; 4] = std::array::from_fn(|n| positions[q[n] as usize]);
-                    if (p[0] - p[2]).length_squared() <= (p[1] - p[3]).length_squared() {
-                        tris.push([q[0], q[1], q[2]]);
-                        tris.push([q[0], q[2], q[3]]);
-                    } else {
-                        tris.push([q[0], q[1], q[3]]);
-                        tris.push([q[1], q[2], q[3]]);
-                    }
+    for &cell in &cells {
+        let i = cell % nx;
+        let j = (cell / nx) % ny;
+        let k = cell / (nx * ny);
+        if i == 0 || j == 0 || k == 0 {
+            continue; // edges on the outer layer never change sign
+        }
+        let s0 = v[cell] < 0.0;
+        for axis in 0..3 {
+            let (i1, j1, k1) = match axis {
+                0 => (i + 1, j, k),
+                1 => (i, j + 1, k),
+                _ => (i, j, k + 1),
+            };
+            if i1 >= nx || j1 >= ny || k1 >= nz {
+                continue;
+            }
+            let s1 = v[grid.idx(i1, j1, k1)] < 0.0;
+            if s0 == s1 {
+                continue;
+            }
+            // Cells around the edge, counter-clockwise seen from +axis (b, c cyclic).
+            let around = |db: usize, dc: usize| -> (usize, usize, usize) {
+                match axis {
+                    0 => (i, j - 1 + db, k - 1 + dc),
+                    1 => (i - 1 + dc, j, k - 1 + db),
+                    _ => (i - 1 + db, j - 1 + dc, k),
                 }
+            };
+            let ring = [around(0, 0), around(1, 0), around(1, 1), around(0, 1)];
+            let mut q: [u32; 4] = std::array::from_fn(|n| find(ring[n].0, ring[n].1, ring[n].2));
+            if q.contains(&u32::MAX) {
+                continue; // cannot happen on a grid with an outside border
+            }
+            if !s0 {
+                q.reverse();
+            }
+            let p: [DVec3; 4] = std::array::from_fn(|n| positions[q[n] as usize]);
+            if (p[0] - p[2]).length_squared() <= (p[1] - p[3]).length_squared() {
+                tris.push([q[0], q[1], q[2]]);
+                tris.push([q[0], q[2], q[3]]);
+            } else {
+                tris.push([q[0], q[1], q[3]]);
+                tris.push([q[1], q[2], q[3]]);
             }
         }
     }
