@@ -9,6 +9,7 @@ mod input;
 mod register;
 mod render;
 mod render_cmd;
+mod render_fused;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
