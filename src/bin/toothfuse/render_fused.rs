@@ -87,11 +87,19 @@ pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Re
         .collect();
     let lo = band_h.iter().copied().fold(f64::INFINITY, f64::min) - 2.0;
     let hi = band_h.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 2.0;
-    let seam = slab(&f.mesh, axis, lo, hi);
+    let mut seam = slab(&f.mesh, axis, lo, hi);
+    // Only the slab's vertices, so the renderer frames the seam.
+    let map = seam.compact();
+    let mut seam_colors = vec![BAND; seam.positions.len()];
+    for (old, &new) in map.iter().enumerate() {
+        if new != u32::MAX {
+            seam_colors[new as usize] = colors[old];
+        }
+    }
     let close = render(
         &[Item {
             mesh: &seam,
-            colors,
+            colors: seam_colors,
         }],
         view,
         w * 3 / 2,
