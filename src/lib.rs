@@ -20,6 +20,7 @@ pub mod io;
 pub mod mesh;
 pub mod mesh_check;
 pub mod phantom;
+pub mod pipeline;
 pub mod register;
 pub mod session;
 pub mod stitch;
