@@ -11,14 +11,19 @@
 #![deny(unsafe_code)]
 
 pub mod arch;
+pub mod cut;
 pub mod error;
 pub mod eval;
+pub mod fuse;
 pub mod geom;
 pub mod io;
 pub mod mesh;
+pub mod mesh_check;
 pub mod phantom;
+pub mod pipeline;
 pub mod register;
 pub mod session;
+pub mod stitch;
 pub mod units;
 
 #[allow(unsafe_code)]

@@ -1,8 +1,12 @@
-//! `toothfuse`: the command-line tool. Subcommands: `demo`, `info`, `render` (more with later
-//! stages). Errors print one line and exit non-zero; never a panic backtrace.
+//! `toothfuse`: the command-line tool. Subcommands: `demo`, `info`, `register`, `fuse`, `eval`,
+//! `render`. Errors print one line and exit non-zero; never a panic backtrace.
 
 mod demo;
+mod eval;
+mod fuse;
 mod info;
+mod input;
+mod register;
 mod render;
 mod render_cmd;
 
@@ -23,6 +27,12 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Print vertices, faces, labels, boundary loops and closed/manifold facts of a mesh file.
     Info(info::InfoArgs),
+    /// Register CBCT teeth to IOS crowns; write the report JSON (synthetic jaw without inputs).
+    Register(register::RegisterArgs),
+    /// Register, cut and stitch: fused.ply, tooth_<fdi>.ply and report.json into a folder.
+    Fuse(fuse::FuseArgs),
+    /// Registration ablation and fusion accuracy over synthetic jaws, as Markdown.
+    Eval(eval::EvalArgs),
     /// Render a picture of the synthetic jaw (IOS crowns over CBCT teeth) to a PNG.
     Render(render_cmd::RenderArgs),
 }
@@ -38,6 +48,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(a) => demo::run(&a),
         Command::Info(a) => info::run(&a),
+        Command::Register(a) => register::run(&a),
+        Command::Fuse(a) => fuse::run(&a),
+        Command::Eval(a) => eval::run(&a),
         Command::Render(a) => render_cmd::run(&a),
     };
     match result {

@@ -1,0 +1,218 @@
+//! One tooth: IOS crown + CBCT tooth + their rigid transforms into the output frame → one closed,
+//! manifold, outward-oriented mesh that holds every IOS crown vertex at exactly its transformed
+//! position (paper section 2.3, Algorithm 1 line 2–7 for one tooth).
+
+use super::quality::{self, ToothQuality};
+use super::{FuseOptions, VertexSource};
+use crate::cut::{self, ToothFrame};
+use crate::mesh::{EdgeTopology, RepairOptions, TriMesh, boundary_loops, repair_open_surface};
+use crate::stitch::{self, BandLoops, BandVertex};
+use crate::{Error, Result, Rigid};
+use glam::DVec3;
+
+/// A fused tooth.
+#[derive(Clone, Debug)]
+pub struct FusedTooth {
+    /// FDI number.
+    pub fdi: u8,
+    /// The fused closed mesh, output frame. Vertices: first the (repaired) IOS crown's, then the
+    /// band interior, then the CBCT root.
+    pub mesh: TriMesh,
+    /// Per vertex: [`VertexSource`] as `u8` (0 IOS, 1 band or fill, 2 CBCT).
+    pub source: Vec<u8>,
+    /// Per vertex of `mesh`: the index of the IOS crown input vertex it is (its position is
+    /// bitwise `ios_to_output.apply(input)`), or `u32::MAX` for band, fill and CBCT vertices.
+    pub ios_vertex: Vec<u32>,
+    /// Quality report.
+    pub quality: ToothQuality,
+    /// Warnings (filled holes, flipped input orientation, self-intersections).
+    pub warnings: Vec<String>,
+}
+
+/// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
+fn loop_dirs(mesh: &TriMesh, lp: &[u32], axis: DVec3) -> Vec<DVec3> {
+    let normals = mesh.vertex_normals();
+    let n = lp.len();
+    (0..n)
+        .map(|i| {
+            let p = |k: usize| mesh.positions[lp[k] as usize];
+            let t = (p((i + 1) % n) - p((i + n - 1) % n)).normalize_or_zero();
+            let nv = normals[lp[i] as usize];
+            let mut d = nv.cross(t).normalize_or_zero();
+            if d.dot(axis) < 0.0 {
+                d = -d;
+            }
+            if d == DVec3::ZERO { axis } else { d }
+        })
+        .collect()
+}
+
+/// Fuses one tooth. `ios_crown` (IOS frame) is an open crown whose longest boundary loop is the
+/// gingival margin; it is repaired first ([`repair_open_surface`]: small holes filled, bow-ties
+/// split, islands dropped). `cbct` (CBCT frame) must
+/// be closed and manifold.
+pub fn fuse_tooth(
+    fdi: u8,
+    ios_crown: &TriMesh,
+    cbct: &TriMesh,
+    ios_to_output: &Rigid,
+    cbct_to_output: &Rigid,
+    opts: &FuseOptions,
+) -> Result<FusedTooth> {
+    fuse_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts)
+        .map_err(|e| e.in_tooth(fdi))
+}
+
+fn fuse_inner(
+    fdi: u8,
+    ios_crown: &TriMesh,
+    cbct: &TriMesh,
+    ios_to_output: &Rigid,
+    cbct_to_output: &Rigid,
+    opts: &FuseOptions,
+) -> Result<FusedTooth> {
+    let mut warnings = Vec::new();
+    // Real crowns are messy: make the crown one oriented manifold disk, filling small holes
+    // (every kept vertex keeps its exact position).
+    let (repaired, rep_src, rep) = repair_open_surface(ios_crown, &RepairOptions::default());
+    if !rep.is_clean() {
+        warnings.push(format!("IOS crown repaired: {rep:?}"));
+    }
+    let mut crown = repaired.transformed(ios_to_output);
+    let mut root_in = cbct.transformed(cbct_to_output);
+    if root_in.signed_volume() < 0.0 {
+        root_in.flip();
+        warnings.push("CBCT tooth was inward-oriented; flipped".into());
+    }
+    let loops = boundary_loops(&crown);
+    if loops.len() != 1 {
+        return Err(Error::InvalidArgument(format!(
+            "IOS crown has {} boundary loops after repair; exactly one (the gingival margin) is needed",
+            loops.len()
+        )));
+    }
+    let mut margin = loops.into_iter().next().unwrap_or_default();
+    let crown_centroid = crate::geom::centroid(&crown.positions).unwrap_or(DVec3::ZERO);
+    let margin_pts: Vec<DVec3> = margin
+        .iter()
+        .map(|&v| crown.positions[v as usize])
+        .collect();
+    let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
+    // The crown lies to the left of its margin seen from outside: counter-clockwise about the
+    // axis. If not, the crown is inward-oriented: flip it (positions untouched).
+    if stitch::param::winding(&frame, &margin_pts) < 0.0 {
+        crown.flip();
+        margin.reverse();
+        warnings.push("IOS crown was inward-oriented; flipped".into());
+    }
+    let mut mesh = crown;
+    let mut ios_vertex = rep_src;
+    let source: Vec<u8> = ios_vertex
+        .iter()
+        .map(|&s| {
+            if s == u32::MAX {
+                VertexSource::Band as u8
+            } else {
+                VertexSource::Ios as u8
+            }
+        })
+        .collect();
+    let mut source = source;
+    let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
+    let dropped = ios_crown.positions.len().saturating_sub(kept_ios);
+    if dropped > 0 {
+        warnings.push(format!(
+            "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
+        ));
+    }
+    let crown_dirs = loop_dirs(&mesh, &margin, frame.axis);
+    // Crown removal.
+    let rc = cut::cut_crown(&root_in, &margin_pts_of(&mesh, &margin), &frame, &opts.cut)?;
+    let lower_pts: Vec<DVec3> = rc
+        .cut_loop
+        .iter()
+        .map(|&v| rc.root.positions[v as usize])
+        .collect();
+    let lower_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
+    let upper_pts = margin_pts_of(&mesh, &margin);
+    let band = stitch::build_band(
+        &BandLoops {
+            upper: &upper_pts,
+            upper_dir: &crown_dirs,
+            lower: &lower_pts,
+            lower_dir: &lower_dirs,
+        },
+        &frame,
+        &opts.stitch,
+    )?;
+    // Assemble: band interior, then root.
+    let band_off = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&band.points);
+    ios_vertex.resize(mesh.positions.len() + rc.root.positions.len(), u32::MAX);
+    source.extend(std::iter::repeat_n(
+        VertexSource::Band as u8,
+        band.points.len(),
+    ));
+    let root_off = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&rc.root.positions);
+    source.extend(std::iter::repeat_n(
+        VertexSource::Cbct as u8,
+        rc.root.positions.len(),
+    ));
+    let map = |b: BandVertex| match b {
+        BandVertex::Upper(i) => margin[i as usize],
+        BandVertex::Lower(i) => rc.cut_loop[i as usize] + root_off,
+        BandVertex::Interior(i) => i + band_off,
+    };
+    let mut band_tris: Vec<[u32; 3]> = band.triangles.iter().map(|t| t.map(map)).collect();
+    // Orient the band against the crown: the crown holds margin[0] → margin[1].
+    let crown_topo = EdgeTopology::new(&mesh);
+    let (m0, m1) = (margin[0], margin[1 % margin.len()]);
+    debug_assert!(crown_topo.faces_of_directed(m0, m1).next().is_some());
+    let band_has = |a: u32, b: u32, tris: &[[u32; 3]]| {
+        tris.iter()
+            .any(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))
+    };
+    if band_has(m0, m1, &band_tris) {
+        for t in &mut band_tris {
+            t.swap(1, 2);
+        }
+    }
+    let band_start = mesh.triangles.len();
+    mesh.triangles.extend_from_slice(&band_tris);
+    let band_end = mesh.triangles.len();
+    let (c0, c1) = (rc.cut_loop[0] + root_off, rc.cut_loop[1] + root_off);
+    if band_has(c0, c1, &band_tris) {
+        return Err(Error::InvalidArgument(
+            "CBCT root and IOS crown have opposite orientations after the cut".into(),
+        ));
+    }
+    mesh.triangles
+        .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
+    let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
+    q.crown_vertices = kept_ios;
+    q.holes_filled = rep.filled_holes;
+    q.cbct_faces_removed = rc.removed_faces;
+    if !(q.closed && q.manifold && q.components == 1) {
+        return Err(Error::InvalidArgument(format!(
+            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components)",
+            q.boundary_edges, q.non_manifold_edges, q.non_manifold_vertices, q.components
+        )));
+    }
+    if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
+        warnings.push(format!("{n} intersecting face pairs"));
+    }
+    let _ = fdi;
+    Ok(FusedTooth {
+        fdi,
+        mesh,
+        source,
+        ios_vertex,
+        quality: q,
+        warnings,
+    })
+}
+
+fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
+    margin.iter().map(|&v| mesh.positions[v as usize]).collect()
+}

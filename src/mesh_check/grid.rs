@@ -1,0 +1,209 @@
+//! A uniform grid of triangle bounding boxes: candidate pairs for intersection tests and
+//! ring-by-ring nearest-triangle search. Deterministic (sorted vectors, no hashing).
+
+use crate::mesh::TriMesh;
+use glam::DVec3;
+
+/// Triangles binned by the grid cells their bounding boxes overlap.
+#[derive(Clone, Debug)]
+pub struct TriangleGrid {
+    /// Lower corner of the grid.
+    pub origin: DVec3,
+    /// Cell edge length (mm).
+    pub cell: f64,
+    /// Cells along x, y, z.
+    pub dims: [i64; 3],
+    /// `(cell id, face)`, sorted.
+    entries: Vec<(u64, u32)>,
+}
+
+impl TriangleGrid {
+    /// Builds the grid over `mesh`; `cell <= 0` picks a cell about twice the mean edge length
+    /// (bounded so the grid has at most ~4 million cells).
+    pub fn new(mesh: &TriMesh, cell: f64) -> Self {
+        let (lo, hi) =
+            crate::geom::bounding_box(&mesh.positions).unwrap_or((DVec3::ZERO, DVec3::ZERO));
+        let ext = (hi - lo).max(DVec3::splat(1e-9));
+        let mut cell = if cell > 0.0 {
+            cell
+        } else {
+            2.0 * mesh.mean_edge_length()
+        };
+        let min_cell = (ext.x * ext.y * ext.z / 4.0e6).cbrt();
+        if !(cell.is_finite() && cell > min_cell) {
+            cell = min_cell.max(1e-6);
+        }
+        let dims = [
+            (ext.x / cell).floor() as i64 + 1,
+            (ext.y / cell).floor() as i64 + 1,
+            (ext.z / cell).floor() as i64 + 1,
+        ];
+        let mut g = Self {
+            origin: lo,
+            cell,
+            dims,
+            entries: Vec::new(),
+        };
+        for f in 0..mesh.triangles.len() {
+            let [a, b, c] = mesh.corners(f);
+            let (l, h) = (a.min(b).min(c), a.max(b).max(c));
+            let (il, ih) = (g.index_of(l), g.index_of(h));
+            for z in il[2]..=ih[2] {
+                for y in il[1]..=ih[1] {
+                    for x in il[0]..=ih[0] {
+                        g.entries.push((g.id([x, y, z]), f as u32));
+                    }
+                }
+            }
+        }
+        g.entries.sort_unstable();
+        g
+    }
+
+    fn index_unclamped(&self, p: DVec3) -> [i64; 3] {
+        let q = (p - self.origin) / self.cell;
+        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+    }
+
+    fn index_of(&self, p: DVec3) -> [i64; 3] {
+        let i = self.index_unclamped(p);
+        [0, 1, 2].map(|k| i[k].clamp(0, self.dims[k] - 1))
+    }
+
+    fn id(&self, i: [i64; 3]) -> u64 {
+        ((i[2] * self.dims[1] + i[1]) * self.dims[0] + i[0]) as u64
+    }
+
+    fn faces_in(&self, id: u64) -> impl Iterator<Item = u32> + '_ {
+        let s = self.entries.partition_point(|&(c, _)| c < id);
+        self.entries[s..]
+            .iter()
+            .take_while(move |&&(c, _)| c == id)
+            .map(|&(_, f)| f)
+    }
+
+    /// Face pairs `(f, g)`, `f < g`, sharing at least one cell and with overlapping bounding
+    /// boxes; sorted and unique.
+    pub fn candidate_pairs(&self, mesh: &TriMesh) -> Vec<(u32, u32)> {
+        let bbox = |f: u32| {
+            let [a, b, c] = mesh.corners(f as usize);
+            (a.min(b).min(c), a.max(b).max(c))
+        };
+        let mut pairs = Vec::new();
+        let mut i = 0;
+        while i < self.entries.len() {
+            let mut j = i;
+            while j < self.entries.len() && self.entries[j].0 == self.entries[i].0 {
+                j += 1;
+            }
+            let run = &self.entries[i..j];
+            for (k, &(_, f)) in run.iter().enumerate() {
+                let (fl, fh) = bbox(f);
+                for &(_, g) in &run[k + 1..] {
+                    let (gl, gh) = bbox(g);
+                    if fl.cmple(gh).all() && gl.cmple(fh).all() {
+                        pairs.push((f.min(g), f.max(g)));
+                    }
+                }
+            }
+            i = j;
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        pairs
+    }
+
+    /// The nearest point of the mesh surface to `p`: `(distance, face, closest point)`, or
+    /// `None` for an empty mesh.
+    pub fn nearest(&self, mesh: &TriMesh, p: DVec3) -> Option<(f64, u32, DVec3)> {
+        if self.entries.is_empty() {
+            return None;
+        }
+        let c = self.index_unclamped(p);
+        let mut best: Option<(f64, u32, DVec3)> = None;
+        let max_r = (0..3)
+            .map(|k| (c[k]).abs().max((c[k] - self.dims[k]).abs()))
+            .max()
+            .unwrap_or(0)
+            + 1;
+        for r in 0..=max_r {
+            for z in c[2] - r..=c[2] + r {
+                if z < 0 || z >= self.dims[2] {
+                    continue;
+                }
+                for y in c[1] - r..=c[1] + r {
+                    if y < 0 || y >= self.dims[1] {
+                        continue;
+                    }
+                    for x in c[0] - r..=c[0] + r {
+                        if x < 0 || x >= self.dims[0] {
+                            continue;
+                        }
+                        let on_ring =
+                            (x - c[0]).abs() == r || (y - c[1]).abs() == r || (z - c[2]).abs() == r;
+                        if !on_ring {
+                            continue;
+                        }
+                        for f in self.faces_in(self.id([x, y, z])) {
+                            let [a, b, cc] = mesh.corners(f as usize);
+                            let q = closest_point_on_triangle(p, a, b, cc);
+                            let d = (q - p).length();
+                            if best.is_none_or(|(bd, bf, _)| d < bd || (d == bd && f < bf)) {
+                                best = Some((d, f, q));
+                            }
+                        }
+                    }
+                }
+            }
+            if let Some((d, _, _)) = best
+                && d <= r as f64 * self.cell
+            {
+                break;
+            }
+        }
+        best
+    }
+}
+
+/// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection 5.1.5).
+pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return a + ab * v;
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return a + ac * w;
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return b + (c - b) * w;
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let v = vb * denom;
+    let w = vc * denom;
+    a + ab * v + ac * w
+}

@@ -1,0 +1,116 @@
+//! Independent geometric checks of a triangle mesh: exact triangle–triangle self-intersection
+//! (Shewchuk's adaptive-precision orientation predicates from the `robust` crate), and
+//! point-to-surface distance. Both use a uniform grid of triangle bounding boxes to stay fast.
+
+mod distance;
+mod grid;
+mod tri_tri;
+
+pub use distance::SurfaceDistance;
+pub use grid::TriangleGrid;
+pub use tri_tri::{TrianglePairKind, pair_kind, triangles_intersect};
+
+use crate::mesh::TriMesh;
+
+/// Pairs of faces `(f, g)`, `f < g`, that intersect improperly: anything beyond sharing exactly
+/// the vertices/edge they have in common in the mesh (crossing, touching, coplanar overlap,
+/// fold-over). Sorted. Exact: decided with robust orientation predicates.
+pub fn self_intersections(mesh: &TriMesh) -> Vec<(u32, u32)> {
+    let grid = TriangleGrid::new(mesh, 0.0);
+    let mut out = Vec::new();
+    for (f, g) in grid.candidate_pairs(mesh) {
+        if triangles_intersect(mesh, f as usize, g as usize) {
+            out.push((f, g));
+        }
+    }
+    out
+}
+
+/// Number of degenerate faces: repeated index or exactly zero area (exactly collinear corners).
+pub fn degenerate_faces(mesh: &TriMesh) -> usize {
+    (0..mesh.triangles.len())
+        .filter(|&f| {
+            let t = mesh.triangles[f];
+            t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || tri_tri::is_collinear(mesh, f)
+        })
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::fixtures::{cube, tetrahedron};
+    use glam::DVec3;
+
+    #[test]
+    fn closed_convex_meshes_do_not_self_intersect() {
+        assert!(self_intersections(&cube(1.0)).is_empty());
+        assert!(self_intersections(&tetrahedron()).is_empty());
+        assert_eq!(degenerate_faces(&cube(1.0)), 0);
+    }
+
+    #[test]
+    fn two_interpenetrating_cubes_intersect() {
+        let mut m = cube(1.0);
+        let mut c = cube(1.0);
+        for p in &mut c.positions {
+            *p += DVec3::new(0.5, 0.3, 0.2);
+        }
+        m.append(&c);
+        let s = self_intersections(&m);
+        assert!(!s.is_empty());
+        assert!(s.iter().all(|&(f, g)| f < 12 && g >= 12));
+    }
+
+    #[test]
+    fn fold_over_and_touching_are_caught() {
+        // Two triangles sharing edge 0-1, the second folded onto the first (coplanar overlap).
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(0.0, 1.0, 0.0),
+                DVec3::new(0.5, 0.5, 0.0),
+            ],
+            vec![[0, 1, 2], [1, 0, 3]],
+        );
+        assert_eq!(self_intersections(&m), vec![(0, 1)]);
+        // Sharing one vertex, second triangle's far edge pierces the first.
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(0.0, 2.0, 0.0),
+                DVec3::new(0.5, 0.5, -1.0),
+                DVec3::new(0.5, 0.5, 1.0),
+            ],
+            vec![[0, 1, 2], [0, 3, 4]],
+        );
+        assert_eq!(self_intersections(&m), vec![(0, 1)]);
+        // Sharing one vertex, the other triangle only touches there: fine.
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(0.0, 2.0, 0.0),
+                DVec3::new(-1.0, -1.0, 1.0),
+                DVec3::new(-1.0, 0.0, -1.0),
+            ],
+            vec![[0, 1, 2], [0, 3, 4]],
+        );
+        assert!(self_intersections(&m).is_empty());
+        // A vertex of one triangle exactly on the other (touching, no shared index).
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(2.0, 0.0, 0.0),
+                DVec3::new(0.0, 2.0, 0.0),
+                DVec3::new(0.5, 0.5, 0.0),
+                DVec3::new(0.5, 0.5, 1.0),
+                DVec3::new(1.5, 0.5, 1.0),
+            ],
+            vec![[0, 1, 2], [3, 4, 5]],
+        );
+        assert_eq!(self_intersections(&m), vec![(0, 1)]);
+    }
+}

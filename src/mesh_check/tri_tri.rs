@@ -1,0 +1,219 @@
+//! Exact triangle–triangle intersection for mesh self-intersection checks. Every decision is a
+//! sign of Shewchuk's adaptive exact `orient3d`/`orient2d` (the `robust` crate), so touching,
+//! coplanar and fold-over configurations are decided exactly. Triangles that share vertices in
+//! the mesh are allowed to meet exactly there and nowhere else.
+
+use crate::mesh::TriMesh;
+use glam::DVec3;
+use robust::{Coord, Coord3D, orient2d, orient3d};
+
+/// How two faces of a mesh relate by shared vertex indices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TrianglePairKind {
+    /// No shared vertex.
+    Disjoint,
+    /// One shared vertex.
+    Vertex,
+    /// One shared edge.
+    Edge,
+    /// The same three vertices.
+    Same,
+}
+
+fn c3(p: DVec3) -> Coord3D<f64> {
+    Coord3D {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+/// Sign of the exact orientation of `d` with respect to the plane through `a, b, c`.
+fn o3(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> i8 {
+    let v = orient3d(c3(a), c3(b), c3(c), c3(d));
+    sgn(v)
+}
+
+fn sgn(v: f64) -> i8 {
+    if v > 0.0 {
+        1
+    } else if v < 0.0 {
+        -1
+    } else {
+        0
+    }
+}
+
+/// Projection that drops the coordinate where `n` is largest (exact: only drops a coordinate).
+#[derive(Clone, Copy)]
+struct Proj(usize);
+
+impl Proj {
+    fn of(n: DVec3) -> Proj {
+        let a = n.abs();
+        if a.x >= a.y && a.x >= a.z {
+            Proj(0)
+        } else if a.y >= a.z {
+            Proj(1)
+        } else {
+            Proj(2)
+        }
+    }
+    fn p(self, v: DVec3) -> Coord<f64> {
+        match self.0 {
+            0 => Coord { x: v.y, y: v.z },
+            1 => Coord { x: v.z, y: v.x },
+            _ => Coord { x: v.x, y: v.y },
+        }
+    }
+    fn o2(self, a: DVec3, b: DVec3, c: DVec3) -> i8 {
+        sgn(orient2d(self.p(a), self.p(b), self.p(c)))
+    }
+}
+
+/// Whether triangle `f` has exactly collinear (or coincident) corners.
+pub(super) fn is_collinear(mesh: &TriMesh, f: usize) -> bool {
+    let [a, b, c] = mesh.corners(f);
+    (0..3).all(|k| Proj(k).o2(a, b, c) == 0)
+}
+
+/// Closed 2D segment–segment intersection in projection `pr` (points coplanar).
+fn seg_seg_2d(pr: Proj, p: DVec3, q: DVec3, a: DVec3, b: DVec3) -> bool {
+    let d1 = pr.o2(a, b, p);
+    let d2 = pr.o2(a, b, q);
+    let d3 = pr.o2(p, q, a);
+    let d4 = pr.o2(p, q, b);
+    if d1 * d2 < 0 && d3 * d4 < 0 {
+        return true;
+    }
+    let on = |x: DVec3, y: DVec3, z: DVec3| {
+        // z on closed segment xy, given collinear.
+        let (px, py, pz) = (pr.p(x), pr.p(y), pr.p(z));
+        pz.x >= px.x.min(py.x)
+            && pz.x <= px.x.max(py.x)
+            && pz.y >= px.y.min(py.y)
+            && pz.y <= px.y.max(py.y)
+    };
+    (d1 == 0 && on(a, b, p))
+        || (d2 == 0 && on(a, b, q))
+        || (d3 == 0 && on(p, q, a))
+        || (d4 == 0 && on(p, q, b))
+}
+
+/// Closed point-in-triangle in projection `pr`.
+fn point_in_tri_2d(pr: Proj, p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
+    let s1 = pr.o2(a, b, p);
+    let s2 = pr.o2(b, c, p);
+    let s3 = pr.o2(c, a, p);
+    (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0)
+}
+
+/// Closed segment `pq` against closed triangle `abc`.
+fn seg_tri(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
+    let sp = o3(a, b, c, p);
+    let sq = o3(a, b, c, q);
+    if sp == sq && sp != 0 {
+        return false;
+    }
+    if sp == 0 && sq == 0 {
+        let pr = Proj::of((b - a).cross(c - a));
+        return point_in_tri_2d(pr, p, a, b, c)
+            || point_in_tri_2d(pr, q, a, b, c)
+            || seg_seg_2d(pr, p, q, a, b)
+            || seg_seg_2d(pr, p, q, b, c)
+            || seg_seg_2d(pr, p, q, c, a);
+    }
+    let u1 = o3(p, q, a, b);
+    let u2 = o3(p, q, b, c);
+    let u3 = o3(p, q, c, a);
+    (u1 >= 0 && u2 >= 0 && u3 >= 0) || (u1 <= 0 && u2 <= 0 && u3 <= 0)
+}
+
+/// Whether direction `x` from `v` lies in the closed sector spanned at `v` by `a` and `b`
+/// (all coplanar, sector smaller than π).
+fn in_sector(pr: Proj, v: DVec3, a: DVec3, b: DVec3, x: DVec3) -> bool {
+    let s = pr.o2(v, a, b);
+    if s == 0 {
+        return false;
+    }
+    let s1 = pr.o2(v, a, x);
+    let s2 = pr.o2(v, x, b);
+    // Strictly, x must also point the same way (not opposite) along a collinear edge.
+    let same_dir = |e: DVec3| {
+        let (pv, pe, px) = (pr.p(v), pr.p(e), pr.p(x));
+        (pe.x - pv.x) * (px.x - pv.x) + (pe.y - pv.y) * (px.y - pv.y) > 0.0
+    };
+    if s1 == 0 {
+        return same_dir(a);
+    }
+    if s2 == 0 {
+        return same_dir(b);
+    }
+    s1 == s && s2 == s
+}
+
+/// Whether faces `f` and `g` of `mesh` intersect improperly (beyond their shared vertices).
+pub fn triangles_intersect(mesh: &TriMesh, f: usize, g: usize) -> bool {
+    let t1 = mesh.triangles[f];
+    let t2 = mesh.triangles[g];
+    let shared: Vec<u32> = t1.iter().copied().filter(|v| t2.contains(v)).collect();
+    let p = |v: u32| mesh.positions[v as usize];
+    match shared.len() {
+        0 => {
+            let [a, b, c] = t1.map(p);
+            let [d, e, h] = t2.map(p);
+            seg_tri(a, b, d, e, h)
+                || seg_tri(b, c, d, e, h)
+                || seg_tri(c, a, d, e, h)
+                || seg_tri(d, e, a, b, c)
+                || seg_tri(e, h, a, b, c)
+                || seg_tri(h, d, a, b, c)
+        }
+        1 => {
+            let v = shared[0];
+            let others = |t: [u32; 3]| {
+                let k = t.iter().position(|&x| x == v).unwrap_or(0);
+                (t[(k + 1) % 3], t[(k + 2) % 3])
+            };
+            let (a, b) = others(t1);
+            let (c, d) = others(t2);
+            let (pv, pa, pb, pc, pd) = (p(v), p(a), p(b), p(c), p(d));
+            if seg_tri(pa, pb, pv, pc, pd) || seg_tri(pc, pd, pv, pa, pb) {
+                return true;
+            }
+            let coplanar = o3(pv, pa, pb, pc) == 0 && o3(pv, pa, pb, pd) == 0;
+            if coplanar {
+                let pr = Proj::of((pa - pv).cross(pb - pv));
+                return in_sector(pr, pv, pa, pb, pc)
+                    || in_sector(pr, pv, pa, pb, pd)
+                    || in_sector(pr, pv, pc, pd, pa)
+                    || in_sector(pr, pv, pc, pd, pb);
+            }
+            false
+        }
+        2 => {
+            let (a, b) = (shared[0], shared[1]);
+            let c = *t1.iter().find(|&&x| x != a && x != b).unwrap_or(&a);
+            let d = *t2.iter().find(|&&x| x != a && x != b).unwrap_or(&a);
+            let (pa, pb, pc, pd) = (p(a), p(b), p(c), p(d));
+            if o3(pa, pb, pc, pd) != 0 {
+                return false;
+            }
+            let pr = Proj::of((pb - pa).cross(pc - pa));
+            let s1 = pr.o2(pa, pb, pc);
+            let s2 = pr.o2(pa, pb, pd);
+            s1 == s2
+        }
+        _ => true,
+    }
+}
+
+/// Kind of a face pair by shared vertices.
+pub fn pair_kind(t1: [u32; 3], t2: [u32; 3]) -> TrianglePairKind {
+    match t1.iter().filter(|v| t2.contains(v)).count() {
+        0 => TrianglePairKind::Disjoint,
+        1 => TrianglePairKind::Vertex,
+        2 => TrianglePairKind::Edge,
+        _ => TrianglePairKind::Same,
+    }
+}
