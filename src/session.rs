@@ -134,10 +134,13 @@ impl Notes {
                     let r = &t.registration;
                     (r.fdi, r.warnings.iter().map(|w| c_string(w)).collect())
                 })
-                .chain(f.registration.teeth.iter().filter_map(|(&k, t)| {
-                    (!f.jaw.teeth.contains_key(&k))
-                        .then(|| (k, t.warnings.iter().map(|w| c_string(w)).collect()))
-                }))
+                .chain(
+                    f.registration
+                        .teeth
+                        .iter()
+                        .filter(|(k, _)| !f.jaw.teeth.contains_key(k))
+                        .map(|(&k, t)| (k, t.warnings.iter().map(|w| c_string(w)).collect())),
+                )
                 .collect(),
             skipped: rep
                 .skipped
