@@ -135,12 +135,17 @@ fn fuse_inner(
         .collect();
     let lower_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
     let upper_pts = margin_pts_of(&mesh, &margin);
+    let chords = loop_chords(&mesh, &margin, BandVertex::Upper)
+        .into_iter()
+        .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
+        .collect::<Vec<_>>();
     let band = stitch::build_band(
         &BandLoops {
             upper: &upper_pts,
             upper_dir: &crown_dirs,
             lower: &lower_pts,
             lower_dir: &lower_dirs,
+            chords: &chords,
         },
         &frame,
         &opts.stitch,
@@ -194,8 +199,21 @@ fn fuse_inner(
     q.holes_filled = rep.filled_holes;
     q.cbct_faces_removed = rc.removed_faces;
     if !(q.closed && q.manifold && q.components == 1) {
+        let topo = EdgeTopology::new(&mesh);
+        let bad: Vec<String> = topo
+            .undirected_edges()
+            .into_iter()
+            .filter(|&(a, b, c)| c != 2 || topo.faces_of_directed(a, b).count() != 1)
+            .take(4)
+            .map(|(a, b, c)| {
+                format!(
+                    "({a}:{}, {b}:{}) x{c}",
+                    source[a as usize], source[b as usize]
+                )
+            })
+            .collect();
         return Err(Error::InvalidArgument(format!(
-            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components)",
+            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components; edges {bad:?})",
             q.boundary_edges, q.non_manifold_edges, q.non_manifold_vertices, q.components
         )));
     }
@@ -215,4 +233,32 @@ fn fuse_inner(
 
 fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
     margin.iter().map(|&v| mesh.positions[v as usize]).collect()
+}
+
+/// Mesh edges joining two non-consecutive vertices of loop `lp`, as loop positions.
+fn loop_chords(
+    mesh: &TriMesh,
+    lp: &[u32],
+    wrap: fn(u32) -> BandVertex,
+) -> Vec<(BandVertex, BandVertex)> {
+    let mut pos = vec![u32::MAX; mesh.positions.len()];
+    for (k, &v) in lp.iter().enumerate() {
+        pos[v as usize] = k as u32;
+    }
+    let n = lp.len() as u32;
+    let mut out = Vec::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (pos[t[k] as usize], pos[t[(k + 1) % 3] as usize]);
+            if a == u32::MAX || b == u32::MAX || a > b {
+                continue;
+            }
+            if b - a != 1 && !(a == 0 && b == n - 1) {
+                out.push((wrap(a), wrap(b)));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }

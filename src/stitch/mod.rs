@@ -32,6 +32,9 @@ pub struct BandLoops<'a> {
     /// Per lower vertex: unit tangent of the root surface, across the loop, pointing from the
     /// root toward the crown (out of the root).
     pub lower_dir: &'a [DVec3],
+    /// Pairs of loop vertices already joined by a crown or root edge that is not a loop edge
+    /// (a chord): the band must not use them as an edge too, or that edge would have 4 faces.
+    pub chords: &'a [(BandVertex, BandVertex)],
 }
 
 /// Where the band's interior points come from.
@@ -166,7 +169,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             (xy, p.pos, d)
         })
         .collect();
-    match triangulate(&up_xy, &lo_xy, &uo, &lo, &inner) {
+    match triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops) {
         Ok(b) => Ok(b),
         Err(first) => {
             // Fallback when a loop folds back around the axis (the cylindrical projection is not
@@ -185,7 +188,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
                     (xy, p.pos, 0.4 * spacing(p.v) * rho / r_mean)
                 })
                 .collect();
-            triangulate(&up_xy, &lo_xy, &uo, &lo, &inner)
+            triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops)
                 .map_err(|e| Error::InvalidArgument(format!("{first}; annulus fallback: {e}")))
         }
     }
@@ -201,37 +204,36 @@ fn triangulate(
     uo: &[u32],
     lo: &[u32],
     interior: &[([f64; 2], DVec3, f64)],
+    loops: &BandLoops,
 ) -> Result<Band> {
     let (nu, nl) = (up_xy.len(), lo_xy.len());
 
     let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
         ConstrainedDelaunayTriangulation::new();
     let mut handle_to_vertex: Vec<Option<BandVertex>> = Vec::new();
-    let mut insert = |cdt: &mut ConstrainedDelaunayTriangulation<Point2<f64>>,
-                      xy: [f64; 2],
-                      bv: BandVertex|
-     -> Result<Option<usize>> {
-        let h = cdt
-            .insert(Point2::new(xy[0], xy[1]))
-            .map_err(|e| Error::InvalidArgument(format!("band triangulation: {e:?}")))?;
-        let i = h.index();
-        if i < handle_to_vertex.len() {
-            return Ok(None);
-        }
-        handle_to_vertex.resize(i + 1, None);
-        handle_to_vertex[i] = Some(bv);
-        Ok(Some(i))
-    };
+
     let mut up_h = Vec::with_capacity(nu);
     for (k, xy) in up_xy.iter().enumerate() {
-        let h = insert(&mut cdt, *xy, BandVertex::Upper(uo[k]))?.ok_or_else(|| {
+        let h = cdt_insert(
+            &mut cdt,
+            &mut handle_to_vertex,
+            *xy,
+            BandVertex::Upper(uo[k]),
+        )?
+        .ok_or_else(|| {
             Error::InvalidArgument("margin loop vertices coincide in the band plane".into())
         })?;
         up_h.push(h);
     }
     let mut lo_h = Vec::with_capacity(nl);
     for (k, xy) in lo_xy.iter().enumerate() {
-        let h = insert(&mut cdt, *xy, BandVertex::Lower(lo[k]))?.ok_or_else(|| {
+        let h = cdt_insert(
+            &mut cdt,
+            &mut handle_to_vertex,
+            *xy,
+            BandVertex::Lower(lo[k]),
+        )?
+        .ok_or_else(|| {
             Error::InvalidArgument("cut loop vertices coincide in the band plane".into())
         })?;
         lo_h.push(h);
@@ -260,10 +262,83 @@ fn triangulate(
         if !in_u || in_l || d_u < min_d || d_l < min_d {
             continue;
         }
-        if insert(&mut cdt, xy, BandVertex::Interior(points.len() as u32))?.is_some() {
+        if cdt_insert(
+            &mut cdt,
+            &mut handle_to_vertex,
+            xy,
+            BandVertex::Interior(points.len() as u32),
+        )?
+        .is_some()
+        {
             points.push(pos);
         }
     }
+    // Chords: split any band edge that duplicates a crown/root chord with a point in its middle.
+    let handle_of = |bv: BandVertex| -> Option<usize> {
+        match bv {
+            BandVertex::Upper(i) => uo.iter().position(|&x| x == i).map(|k| up_h[k]),
+            BandVertex::Lower(i) => lo.iter().position(|&x| x == i).map(|k| lo_h[k]),
+            BandVertex::Interior(_) => None,
+        }
+    };
+    let pos3 = |bv: BandVertex| match bv {
+        BandVertex::Upper(i) => loops.upper[i as usize],
+        BandVertex::Lower(i) => loops.lower[i as usize],
+        BandVertex::Interior(i) => points[i as usize],
+    };
+    let mut pending: Vec<(usize, usize, DVec3, DVec3)> = loops
+        .chords
+        .iter()
+        .filter_map(|&(a, b)| Some((handle_of(a)?, handle_of(b)?, pos3(a), pos3(b))))
+        .collect();
+    for _round in 0..8 {
+        let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
+        let mut next = Vec::new();
+        for &(a, b, pa, pb) in &pending {
+            if let Some(e) = cdt.get_edge_from_neighbors(vh[a], vh[b]) {
+                let [va, vb] = e.vertices();
+                let (qa, qb) = (va.position(), vb.position());
+                let mid = [0.5 * (qa.x + qb.x), 0.5 * (qa.y + qb.y)];
+                let pm = 0.5 * (pa + pb);
+                if let Some(h) = cdt_insert(
+                    &mut cdt,
+                    &mut handle_to_vertex,
+                    mid,
+                    BandVertex::Interior(points.len() as u32),
+                )? {
+                    points.push(pm);
+                    next.push((a, h, pa, pm));
+                    next.push((h, b, pm, pb));
+                }
+            }
+        }
+        if next.is_empty() {
+            break;
+        }
+        pending = next;
+    }
+    let triangles: Vec<[BandVertex; 3]> =
+        band_faces_ordered(&cdt, &up_h, &lo_h, &handle_to_vertex)?;
+    // An annulus triangulation has exactly nu + nl + 2·interior triangles.
+    let expected = nu + nl + 2 * points.len();
+    if triangles.len() != expected {
+        return Err(Error::InvalidArgument(format!(
+            "band has {} triangles, an annulus with these vertices has {expected}",
+            triangles.len()
+        )));
+    }
+    Ok(Band { points, triangles })
+}
+
+type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
+
+/// The triangles between the two loop polygons (counter-clockwise in the plane).
+fn band_faces_ordered(
+    cdt: &Cdt,
+    up_h: &[usize],
+    lo_h: &[usize],
+    handle_to_vertex: &[Option<BandVertex>],
+) -> Result<Vec<[BandVertex; 3]>> {
     // Every loop edge must have survived as a constraint edge.
     let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
     let mut seeds = Vec::new();
@@ -325,15 +400,7 @@ fn triangulate(
             }
         }
     }
-    // An annulus triangulation has exactly nu + nl + 2·interior triangles.
-    let expected = nu + nl + 2 * points.len();
-    if triangles.len() != expected {
-        return Err(Error::InvalidArgument(format!(
-            "band has {} triangles, an annulus with these vertices has {expected}",
-            triangles.len()
-        )));
-    }
-    Ok(Band { points, triangles })
+    Ok(triangles)
 }
 
 /// Ours: rings between the loops, spacing graded geometrically from the margin's mean edge
@@ -460,4 +527,23 @@ fn polygon_side(poly: &[[f64; 2]], q: [f64; 2]) -> (bool, f64) {
         best = best.min((dx * dx + dy * dy).sqrt());
     }
     (inside, best)
+}
+
+/// Inserts a plane point; `None` if it coincides with an existing vertex.
+fn cdt_insert(
+    cdt: &mut Cdt,
+    handle_to_vertex: &mut Vec<Option<BandVertex>>,
+    xy: [f64; 2],
+    bv: BandVertex,
+) -> Result<Option<usize>> {
+    let h = cdt
+        .insert(Point2::new(xy[0], xy[1]))
+        .map_err(|e| Error::InvalidArgument(format!("band triangulation: {e:?}")))?;
+    let i = h.index();
+    if i < handle_to_vertex.len() {
+        return Ok(None);
+    }
+    handle_to_vertex.resize(i + 1, None);
+    handle_to_vertex[i] = Some(bv);
+    Ok(Some(i))
 }

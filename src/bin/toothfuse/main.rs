@@ -9,6 +9,7 @@ mod input;
 mod register;
 mod render;
 mod render_cmd;
+mod render_fused;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -57,7 +58,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-            eprintln!("toothfuse: error: {}", chain.join(": "));
+            // One line, whatever the underlying parsers put in their messages.
+            let line = chain
+                .join(": ")
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
+            eprintln!("toothfuse: error: {line}");
             ExitCode::FAILURE
         }
     }

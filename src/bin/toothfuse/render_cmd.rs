@@ -18,6 +18,12 @@ pub struct RenderArgs {
     /// Width of each panel in pixels.
     #[arg(long, default_value_t = 640)]
     width: usize,
+    /// Instead: before/after of one tooth (CBCT-only vs fused, seam close-up coloured by source).
+    #[arg(long)]
+    fused: bool,
+    /// Tooth of the --fused picture (FDI; default the first fused tooth).
+    #[arg(long)]
+    tooth: Option<u8>,
 }
 
 const IOS_CROWN: [f64; 3] = [0.93, 0.88, 0.74];
@@ -27,6 +33,9 @@ const CBCT: [f64; 3] = [0.55, 0.68, 0.86];
 /// Runs `toothfuse render`: two panels (occlusal and buccal view) of the IOS jaw with the CBCT
 /// teeth placed by the true transforms, plus one panel of the CBCT teeth alone.
 pub fn run(a: &RenderArgs) -> Result<()> {
+    if a.fused {
+        return crate::render_fused::run(&a.phantom, a.tooth, &a.out, a.width);
+    }
     let ph = a.phantom.generate()?;
     let labels = ph.ios.vertex_labels.clone().unwrap_or_default();
     let ios_colors: Vec<[f64; 3]> = labels
