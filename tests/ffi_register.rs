@@ -121,8 +121,10 @@ fn registers_a_phantom_against_its_truth_and_keeps_results_on_failure() {
     let p = phantom(3);
     let s = Session::new();
     add_phantom(&s, &p);
-    let mut opts = toothfuse_options::default();
-    opts.frame = TOOTHFUSE_FRAME_IOS;
+    let opts = toothfuse_options {
+        frame: TOOTHFUSE_FRAME_IOS,
+        ..toothfuse_options::default()
+    };
     // SAFETY: live session, valid options.
     let st = unsafe { toothfuse_session_register(s.0, &opts) };
     assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
