@@ -94,10 +94,8 @@ fn fused_getters_before_fuse_are_wrong_state_and_too_few_teeth_missing_data() {
     add_phantom(&s, &p);
     // Registration alone does not give fused meshes.
     // SAFETY: live session, NULL options = defaults.
-    assert_eq!(
-        unsafe { toothfuse_session_register(s.0, ptr::null()) },
-        toothfuse_status::Ok
-    );
+    let st = unsafe { toothfuse_session_register(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok);
     let mut q = toothfuse_fused_quality::default();
     // SAFETY: live session, valid out pointer.
     let st = unsafe { toothfuse_session_fused_quality(s.0, 11, &mut q) };

@@ -76,10 +76,8 @@ fn options_default_and_validation() {
         assert!(s.error().contains(what), "{}", s.error());
     }
     // SAFETY: NULL session.
-    assert_eq!(
-        unsafe { toothfuse_session_register(ptr::null_mut(), ptr::null()) },
-        toothfuse_status::NullParameter
-    );
+    let st = unsafe { toothfuse_session_register(ptr::null_mut(), ptr::null()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
 }
 
 #[test]
