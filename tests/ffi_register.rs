@@ -184,10 +184,8 @@ fn registers_a_phantom_against_its_truth_and_keeps_results_on_failure() {
     // Skipped teeth: one modality only, with a reason.
     let mut n = 0usize;
     // SAFETY: live session, valid out pointer.
-    assert_eq!(
-        unsafe { toothfuse_session_skipped_count(s.0, &mut n) },
-        toothfuse_status::Ok
-    );
+    let st = unsafe { toothfuse_session_skipped_count(s.0, &mut n) };
+    assert_eq!(st, toothfuse_status::Ok);
     let one_only = p
         .truth
         .teeth
@@ -278,10 +276,8 @@ fn transform_getter_rejects_bad_arguments() {
     let s = Session::new();
     add_phantom(&s, &p);
     // SAFETY: live session, NULL options = defaults.
-    assert_eq!(
-        unsafe { toothfuse_session_register(s.0, ptr::null()) },
-        toothfuse_status::Ok
-    );
+    let st = unsafe { toothfuse_session_register(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok);
     let fdi = registered(&s)[0];
     let mut m = [0f64; 16];
     // SAFETY: live session; bad `which`, NULL output, non-FDI number, unregistered tooth.
