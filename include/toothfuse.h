@@ -22,6 +22,21 @@
 #include <stdint.h>
 
 /**
+ * Per-vertex source of a fused mesh vertex (`uint8_t`): the IOS crown.
+ */
+#define TOOTHFUSE_SOURCE_IOS 0
+
+/**
+ * Per-vertex source: the stitched band (or a filled crown hole).
+ */
+#define TOOTHFUSE_SOURCE_BAND 1
+
+/**
+ * Per-vertex source: the CBCT root.
+ */
+#define TOOTHFUSE_SOURCE_CBCT 2
+
+/**
  * Major version of the library (the shared library's SOVERSION).
  */
 #define TOOTHFUSE_VERSION_MAJOR 0
@@ -127,6 +142,137 @@ typedef uint32_t toothfuse_status;
 typedef struct toothfuse_session toothfuse_session;
 
 /**
+ * Option preset: one of the `TOOTHFUSE_PRESET_*` values.
+ */
+typedef uint32_t toothfuse_preset;
+
+/**
+ * Output frame of the fused meshes and reported transforms: one of `TOOTHFUSE_FRAME_*`.
+ */
+typedef uint32_t toothfuse_frame;
+
+/**
+ * Options of `toothfuse_session_register` and `toothfuse_session_fuse`. Fill it with
+ * `toothfuse_options_default` (which sets `struct_size`), then change fields. The ABI grows by
+ * appending fields: a caller built against an older header passes its smaller `struct_size`
+ * and the fields it does not know take their defaults.
+ */
+typedef struct toothfuse_options {
+  /**
+   * `sizeof(toothfuse_options)` as the caller was compiled.
+   */
+  size_t struct_size;
+  /**
+   * TOOTHFUSE_PRESET_DEFAULT (default) or TOOTHFUSE_PRESET_PAPER.
+   */
+  toothfuse_preset preset;
+  /**
+   * TOOTHFUSE_FRAME_CBCT (default) or TOOTHFUSE_FRAME_IOS.
+   */
+  toothfuse_frame frame;
+} toothfuse_options;
+
+/**
+ * A borrowed, read-only view of a fused mesh. The pointers point into the session: valid
+ * until the session's teeth or results change (add, replace, remove, clear, register, fuse) or
+ * it is freed; never free them.
+ */
+typedef struct toothfuse_fused_view {
+  /**
+   * `3 * vertex_count` doubles: x, y, z of each vertex, millimetres, output frame.
+   */
+  const double *positions;
+  /**
+   * Number of vertices.
+   */
+  size_t vertex_count;
+  /**
+   * `index_count` vertex indices, 3 per triangle, counter-clockwise seen from outside.
+   */
+  const uint32_t *indices;
+  /**
+   * Number of indices (3 per triangle).
+   */
+  size_t index_count;
+  /**
+   * `vertex_count` sources: TOOTHFUSE_SOURCE_IOS, _BAND or _CBCT.
+   */
+  const uint8_t *source;
+  /**
+   * Whole jaw: `vertex_count` FDI labels; one tooth: NULL (every vertex is that tooth).
+   */
+  const int32_t *labels;
+} toothfuse_fused_view;
+
+/**
+ * Scalar type of a vertex buffer: one of the `TOOTHFUSE_SCALAR_*` values.
+ */
+typedef uint32_t toothfuse_scalar;
+
+/**
+ * Quality of one fused tooth, as measured by toothfuse itself (the C++ tests check the same
+ * facts with VTK and OpenMesh).
+ */
+typedef struct toothfuse_fused_quality {
+  /**
+   * Enclosed volume (mm^3), positive when outward oriented.
+   */
+  double volume;
+  /**
+   * Smallest angle (degrees) of any band triangle.
+   */
+  double band_min_angle_deg;
+  /**
+   * Mean band edge length (mm).
+   */
+  double band_edge_mean;
+  /**
+   * Connected components (1 for a good fusion).
+   */
+  size_t components;
+  /**
+   * Edges used by one face (0 when closed).
+   */
+  size_t boundary_edges;
+  /**
+   * Edges used by more than two faces.
+   */
+  size_t non_manifold_edges;
+  /**
+   * Vertices joining separate fans of faces.
+   */
+  size_t non_manifold_vertices;
+  /**
+   * Intersecting face pairs; SIZE_MAX when the check was not run.
+   */
+  size_t self_intersections;
+  /**
+   * Degenerate faces.
+   */
+  size_t degenerate_faces;
+  /**
+   * Band triangles.
+   */
+  size_t band_faces;
+  /**
+   * IOS crown vertices kept (all of them).
+   */
+  size_t crown_vertices;
+  /**
+   * Every edge in exactly two faces.
+   */
+  bool closed;
+  /**
+   * No non-manifold edge or vertex.
+   */
+  bool manifold;
+  /**
+   * Closed, manifold, one component, positive volume, nothing degenerate or intersecting.
+   */
+  bool watertight;
+} toothfuse_fused_quality;
+
+/**
  * Which scan a tooth comes from: one of the `TOOTHFUSE_MODALITY_*` values.
  */
 typedef uint32_t toothfuse_modality;
@@ -154,11 +300,6 @@ typedef struct toothfuse_mesh_view {
    */
   size_t index_count;
 } toothfuse_mesh_view;
-
-/**
- * Scalar type of a vertex buffer: one of the `TOOTHFUSE_SCALAR_*` values.
- */
-typedef uint32_t toothfuse_scalar;
 
 /**
  * What IOS repair changed in one tooth (see `toothfuse_session_set_ios_repair`).
@@ -251,6 +392,46 @@ typedef struct toothfuse_mesh_info {
 } toothfuse_mesh_info;
 
 /**
+ * Which per-tooth transform: one of the `TOOTHFUSE_TRANSFORM_*` values.
+ */
+typedef uint32_t toothfuse_transform;
+
+/**
+ * Registration report of one tooth.
+ */
+typedef struct toothfuse_tooth_report {
+  /**
+   * The paper's surface distance SD: mean distance (mm) from the registered IOS crown points to
+   * the CBCT surface.
+   */
+  double sd_mm;
+  /**
+   * RMS of the same distances (mm).
+   */
+  double rmse_mm;
+  /**
+   * Fraction of IOS points within the inlier distance of the CBCT surface.
+   */
+  double inlier_fraction;
+  /**
+   * Size (mm) of the fine stage's correction at the crown.
+   */
+  double fine_correction_mm;
+  /**
+   * ICP iterations.
+   */
+  size_t iterations;
+  /**
+   * Number of warnings (read each with `toothfuse_session_tooth_warning`).
+   */
+  size_t warning_count;
+  /**
+   * The ICP converged.
+   */
+  bool converged;
+} toothfuse_tooth_report;
+
+/**
  * Where the labels of a jaw mesh live: one of the `TOOTHFUSE_LABEL_DOMAIN_*` values.
  */
 typedef uint32_t toothfuse_label_domain;
@@ -264,6 +445,41 @@ typedef uint32_t toothfuse_label_domain;
  * 64-bit IEEE `double`.
  */
 #define TOOTHFUSE_SCALAR_FLOAT64 1
+
+/**
+ * The paper's method, faithfully (CA, CR, FR over tooth triples; its cut and stitch).
+ */
+#define TOOTHFUSE_PRESET_PAPER 0
+
+/**
+ * The measured-better default (robust ICP, crown-only centroids, guarded fine steps, ...).
+ */
+#define TOOTHFUSE_PRESET_DEFAULT 1
+
+/**
+ * The CBCT frame (fused teeth overlay the CBCT volume).
+ */
+#define TOOTHFUSE_FRAME_CBCT 0
+
+/**
+ * The IOS frame.
+ */
+#define TOOTHFUSE_FRAME_IOS 1
+
+/**
+ * CBCT frame → output frame.
+ */
+#define TOOTHFUSE_TRANSFORM_CBCT_TO_OUTPUT 0
+
+/**
+ * IOS frame → output frame.
+ */
+#define TOOTHFUSE_TRANSFORM_IOS_TO_OUTPUT 1
+
+/**
+ * CBCT frame → IOS frame (independent of the output frame).
+ */
+#define TOOTHFUSE_TRANSFORM_CBCT_TO_IOS 2
 
 /**
  * Intraoral scan: crowns only, open at the gingival margin; must be 2-manifold.
@@ -289,6 +505,119 @@ typedef uint32_t toothfuse_label_domain;
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Runs the one-call fuse: registers anew with `options` (NULL = defaults; always, so the
+ * transforms and fused meshes agree), then removes each CBCT crown along the registered IOS
+ * margin and stitches IOS crown + band + CBCT root into one closed, manifold mesh per tooth
+ * (paper section 2.3, Algorithm 1). The results replace earlier ones on the session. A tooth
+ * whose fusion fails is listed by `toothfuse_session_skipped` with the reason and the others are
+ * delivered. Fails with MISSING_DATA (fewer than three teeth in both modalities, named in the
+ * message); on any failure the previous results (registration, fused meshes) are kept.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `options` NULL or a valid options struct.
+ */
+toothfuse_status toothfuse_session_fuse(struct toothfuse_session *session,
+                                        const struct toothfuse_options *options);
+
+/**
+ * Copies the FDI numbers of the fused teeth, ascending, into `fdi_out` (room for `capacity`)
+ * and writes how many to `*count_out`; BUFFER_TOO_SMALL (nothing written) when `capacity` is
+ * below the count (52 always suffices). WRONG_STATE before a fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `fdi_out` must have room for `capacity` `int32_t`;
+ * `count_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_teeth(const struct toothfuse_session *session,
+                                               int32_t *fdi_out,
+                                               size_t capacity,
+                                               size_t *count_out);
+
+/**
+ * Writes the vertex count and the index count (3 per triangle) of fused mesh `fdi` (0 = whole
+ * jaw). WRONG_STATE before a fuse; MISSING_DATA for a tooth that was not fused.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; the outputs NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_size(const struct toothfuse_session *session,
+                                              int32_t fdi,
+                                              size_t *vertex_count_out,
+                                              size_t *index_count_out);
+
+/**
+ * Writes a borrowed view of fused mesh `fdi` (0 = whole jaw) to `*view_out`.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `view_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_view(const struct toothfuse_session *session,
+                                              int32_t fdi,
+                                              struct toothfuse_fused_view *view_out);
+
+/**
+ * Copies the vertices of fused mesh `fdi` (0 = whole jaw) as `toothfuse_session_copy_vertices`
+ * does (strided, float or double; BUFFER_TOO_SMALL when `vertex_capacity` is below the count).
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `vertices_out` must hold
+ * `(vertex_capacity - 1) * stride_bytes + 3 * sizeof(scalar)` writable bytes.
+ */
+toothfuse_status toothfuse_session_copy_fused_vertices(const struct toothfuse_session *session,
+                                                       int32_t fdi,
+                                                       void *vertices_out,
+                                                       size_t vertex_capacity,
+                                                       size_t stride_bytes,
+                                                       toothfuse_scalar scalar);
+
+/**
+ * Copies the triangle indices of fused mesh `fdi` (0 = whole jaw), 3 per triangle;
+ * BUFFER_TOO_SMALL (nothing written) when `index_capacity` is below the index count.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `indices_out` room for `index_capacity` `uint32_t`.
+ */
+toothfuse_status toothfuse_session_copy_fused_indices(const struct toothfuse_session *session,
+                                                      int32_t fdi,
+                                                      uint32_t *indices_out,
+                                                      size_t index_capacity);
+
+/**
+ * Copies the per-vertex source (TOOTHFUSE_SOURCE_*) of fused mesh `fdi` (0 = whole jaw);
+ * BUFFER_TOO_SMALL (nothing written) when `capacity` is below the vertex count.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `source_out` room for `capacity` bytes.
+ */
+toothfuse_status toothfuse_session_copy_fused_sources(const struct toothfuse_session *session,
+                                                      int32_t fdi,
+                                                      uint8_t *source_out,
+                                                      size_t capacity);
+
+/**
+ * Copies the per-vertex FDI labels of the whole fused jaw (vertex count from
+ * `toothfuse_session_fused_size(session, 0, ...)`); BUFFER_TOO_SMALL (nothing written) when
+ * `capacity` is below it. WRONG_STATE before a fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `labels_out` room for `capacity` `int32_t`.
+ */
+toothfuse_status toothfuse_session_copy_fused_labels(const struct toothfuse_session *session,
+                                                     int32_t *labels_out,
+                                                     size_t capacity);
+
+/**
+ * Writes the quality report of fused tooth `fdi` to `*quality_out`. WRONG_STATE before a fuse;
+ * MISSING_DATA (with the reason) for a tooth that was not fused.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `quality_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_quality(const struct toothfuse_session *session,
+                                                 int32_t fdi,
+                                                 struct toothfuse_fused_quality *quality_out);
 
 /**
  * Writes the vertex count and the index count (3 per triangle) of tooth `fdi` of `modality`.
@@ -388,6 +717,122 @@ toothfuse_status toothfuse_session_mesh_info(const struct toothfuse_session *ses
                                              toothfuse_modality modality,
                                              int32_t fdi,
                                              struct toothfuse_mesh_info *info_out);
+
+/**
+ * Writes the default options (preset DEFAULT, frame CBCT, `struct_size` set) to `*options_out`.
+ *
+ * # Safety
+ * `options_out` must be NULL or writable.
+ */
+toothfuse_status toothfuse_options_default(struct toothfuse_options *options_out);
+
+/**
+ * Registers the held CBCT teeth to the held IOS crowns (paper section 2.2; `options` NULL =
+ * defaults) and keeps the result on the session, replacing an earlier one (and dropping fused
+ * results). IOS repair (`toothfuse_session_set_ios_repair`) has already applied when the crowns
+ * were added. Fails with MISSING_DATA (the message names the teeth) when fewer than three
+ * teeth are in both modalities or their centroids are collinear; on any failure the previous
+ * results are kept. Teeth in one modality only are listed by `toothfuse_session_skipped`.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `options` NULL or a valid options struct.
+ */
+toothfuse_status toothfuse_session_register(struct toothfuse_session *session,
+                                            const struct toothfuse_options *options);
+
+/**
+ * Copies the FDI numbers of the registered teeth, ascending, into `fdi_out` (room for
+ * `capacity`; NULL allowed when 0) and writes how many to `*count_out`. BUFFER_TOO_SMALL
+ * (nothing written) when `capacity` is below the count; room for 52 (every FDI number) always
+ * suffices. WRONG_STATE before a register or fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `fdi_out` must have room for `capacity` `int32_t`;
+ * `count_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_registered_teeth(const struct toothfuse_session *session,
+                                                    int32_t *fdi_out,
+                                                    size_t capacity,
+                                                    size_t *count_out);
+
+/**
+ * Writes the 4×4 rigid transform `which` (TOOTHFUSE_TRANSFORM_*) of registered tooth `fdi` to
+ * `out16`, row-major (`out16[4*r + c]`; the last row is 0 0 0 1; translation in `out16[3]`,
+ * `out16[7]`, `out16[11]`, millimetres). WRONG_STATE before a register or fuse; MISSING_DATA
+ * for a tooth that was not registered.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `out16` NULL or room for 16 doubles.
+ */
+toothfuse_status toothfuse_session_transform(const struct toothfuse_session *session,
+                                             int32_t fdi,
+                                             toothfuse_transform which,
+                                             double *out16);
+
+/**
+ * Writes the registration report of tooth `fdi` to `*report_out`. After a fuse, the warnings
+ * counted include the fusion's. WRONG_STATE before a register or fuse; MISSING_DATA for a tooth
+ * that was not registered.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `report_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_tooth_report(const struct toothfuse_session *session,
+                                                int32_t fdi,
+                                                struct toothfuse_tooth_report *report_out);
+
+/**
+ * Writes warning `index` (0-based, below the report's `warning_count`) of tooth `fdi` to
+ * `*warning_out`: a NUL-terminated string borrowed from the session, valid until the session's
+ * teeth or results change or it is freed; never free it. INDEX_OUT_OF_BOUNDS past the last.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `warning_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_tooth_warning(const struct toothfuse_session *session,
+                                                 int32_t fdi,
+                                                 size_t index,
+                                                 const char **warning_out);
+
+/**
+ * Writes the number of skipped teeth of the last result to `*count_out`: after a register,
+ * teeth in one modality only; after a fuse, also teeth whose fusion failed. WRONG_STATE before a
+ * register or fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `count_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_skipped_count(const struct toothfuse_session *session,
+                                                 size_t *count_out);
+
+/**
+ * Writes skipped tooth `index` (0-based, FDI order): its FDI number to `*fdi_out` and the
+ * reason (NUL-terminated, borrowed as for `toothfuse_session_tooth_warning`) to `*reason_out`.
+ * INDEX_OUT_OF_BOUNDS past the last; WRONG_STATE before a register or fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; the outputs NULL or writable.
+ */
+toothfuse_status toothfuse_session_skipped(const struct toothfuse_session *session,
+                                           size_t index,
+                                           int32_t *fdi_out,
+                                           const char **reason_out);
+
+/**
+ * Copies the report JSON of the last result (after a fuse: the `toothfuse fuse` report.json;
+ * after a register: the `toothfuse register` report) into `buf`, NUL-terminated, and writes its
+ * length without the NUL to `*len_out`. Size query: `buf` NULL and `capacity` 0 writes only
+ * `*len_out`. BUFFER_TOO_SMALL (nothing written) when `capacity < length + 1`. WRONG_STATE
+ * before a register or fuse.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `buf` room for `capacity` bytes; `len_out` NULL or
+ * writable.
+ */
+toothfuse_status toothfuse_session_report_json(const struct toothfuse_session *session,
+                                               char *buf,
+                                               size_t capacity,
+                                               size_t *len_out);
 
 /**
  * Creates an empty session and writes it to `*session_out`.

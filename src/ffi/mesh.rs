@@ -98,6 +98,55 @@ pub struct toothfuse_repair_report {
     pub added_vertices: usize,
 }
 
+/// Writes `positions` into a caller's strided vertex buffer (x, y, z as 3 packed `scalar` values
+/// at byte offset `i * stride_bytes`); BUFFER_TOO_SMALL when `vertex_capacity` is below the count.
+///
+/// # Safety
+/// `vertices_out` must hold `(vertex_capacity - 1) * stride_bytes + 3 * sizeof(scalar)` writable
+/// bytes.
+pub(crate) unsafe fn write_vertices(
+    positions: &[glam::DVec3],
+    vertices_out: *mut c_void,
+    vertex_capacity: usize,
+    stride_bytes: usize,
+    scalar: toothfuse_scalar,
+) -> FfiResult {
+    let scalar = decode_scalar(scalar)?;
+    let size = scalar.size();
+    if stride_bytes < 3 * size {
+        return Err(Failure::invalid(format!(
+            "vertex stride {stride_bytes} bytes is smaller than one vertex ({} bytes)",
+            3 * size
+        )));
+    }
+    let n = positions.len();
+    if vertex_capacity < n {
+        return Err(Failure::new(
+            toothfuse_status::BufferTooSmall,
+            format!("{n} vertices to copy but the buffer has room for {vertex_capacity}"),
+        ));
+    }
+    let len = VertexBuffer::required_len(n, stride_bytes, scalar).ok_or_else(|| {
+        Failure::invalid(format!(
+            "{n} vertices at stride {stride_bytes} bytes overflow the address space"
+        ))
+    })?;
+    // SAFETY: the caller guarantees room for `vertex_capacity >= n` vertices at this stride,
+    // i.e. at least `len` writable bytes.
+    let out = unsafe { slice_out(vertices_out.cast::<u8>(), len, "vertices_out") }?;
+    for (i, p) in positions.iter().enumerate() {
+        let base = i * stride_bytes;
+        for (k, c) in p.to_array().into_iter().enumerate() {
+            let o = base + k * size;
+            match scalar {
+                Scalar::F32 => out[o..o + 4].copy_from_slice(&(c as f32).to_ne_bytes()),
+                Scalar::F64 => out[o..o + 8].copy_from_slice(&c.to_ne_bytes()),
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Finds the tooth, naming it on failure.
 fn find(s: &Session, modality: toothfuse_modality, fdi: i32) -> FfiResult<&Tooth> {
     let m: Modality = decode_modality(modality)?;
@@ -193,38 +242,12 @@ pub unsafe extern "C" fn toothfuse_session_copy_vertices(
 ) -> toothfuse_status {
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
-        let scalar = decode_scalar(scalar)?;
-        let size = scalar.size();
-        if stride_bytes < 3 * size {
-            return Err(Failure::invalid(format!(
-                "vertex stride {stride_bytes} bytes is smaller than one vertex ({} bytes)",
-                3 * size
-            )));
-        }
         let t = find(s, modality, fdi)?;
-        let n = t.mesh.positions.len();
-        if vertex_capacity < n {
-            return Err(too_small("vertices", n, vertex_capacity, fdi));
+        // SAFETY: forwarded contract on `vertices_out`.
+        unsafe {
+            write_vertices(&t.mesh.positions, vertices_out, vertex_capacity, stride_bytes, scalar)
         }
-        let len = VertexBuffer::required_len(n, stride_bytes, scalar).ok_or_else(|| {
-            Failure::invalid(format!(
-                "{n} vertices at stride {stride_bytes} bytes overflow the address space"
-            ))
-        })?;
-        // SAFETY: the caller guarantees room for `vertex_capacity >= n` vertices at
-        // this stride, i.e. at least `len` writable bytes.
-        let out = unsafe { slice_out(vertices_out.cast::<u8>(), len, "vertices_out") }?;
-        for (i, p) in t.mesh.positions.iter().enumerate() {
-            let base = i * stride_bytes;
-            for (k, c) in p.to_array().into_iter().enumerate() {
-                let o = base + k * size;
-                match scalar {
-                    Scalar::F32 => out[o..o + 4].copy_from_slice(&(c as f32).to_ne_bytes()),
-                    Scalar::F64 => out[o..o + 8].copy_from_slice(&c.to_ne_bytes()),
-                }
-            }
-        }
-        Ok(())
+        .map_err(|f| Failure::new(f.status, format!("tooth {fdi}: {}", f.message)))
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

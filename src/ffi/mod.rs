@@ -10,15 +10,20 @@
 //! a panic boundary; a panic poisons the session.
 //!
 //! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
-//! (reading a tooth back), plus [`status`], [`version`] and the [`boundary`] helpers.
+//! (reading a tooth back), [`register`] (options, registration and its report), [`fuse`]
+//! (one-call fuse, fused meshes and their quality), plus [`status`], [`version`] and the [`boundary`] helpers.
 
 pub mod boundary;
+pub mod fuse;
 pub mod mesh;
+pub mod register;
 pub mod session;
 pub mod status;
 pub mod version;
 
+pub use fuse::*;
 pub use mesh::*;
+pub use register::*;
 pub use session::*;
 pub use status::*;
 pub use version::*;

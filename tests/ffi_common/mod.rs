@@ -120,3 +120,51 @@ impl Drop for Session {
         unsafe { toothfuse_session_free(self.0) };
     }
 }
+
+/// A small synthetic jaw (partial arch: 3–5 teeth, fast) for registration and fusion tests.
+pub fn phantom(seed: u64) -> toothfuse::phantom::Phantom {
+    use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+    Phantom::generate(&PhantomOptions {
+        seed,
+        variant: Variant::PartialArch,
+        ..PhantomOptions::default()
+    })
+    .expect("phantom")
+}
+
+/// Feeds a phantom through the ABI: the labeled IOS jaw with `add_jaw`, each CBCT tooth with
+/// `add_tooth`.
+pub fn add_phantom(s: &Session, p: &toothfuse::phantom::Phantom) {
+    let v: Vec<f64> = p
+        .ios
+        .mesh
+        .positions
+        .iter()
+        .flat_map(|q| q.to_array())
+        .collect();
+    let t: Vec<u32> = p.ios.mesh.triangles.iter().flatten().copied().collect();
+    let labels = p.ios.vertex_labels.as_ref().expect("vertex labels");
+    // SAFETY: buffers sized as announced.
+    let st = unsafe {
+        toothfuse_session_add_jaw(
+            s.0,
+            TOOTHFUSE_MODALITY_IOS,
+            v.as_ptr().cast(),
+            v.len() / 3,
+            24,
+            TOOTHFUSE_SCALAR_FLOAT64,
+            t.as_ptr(),
+            t.len(),
+            labels.as_ptr(),
+            labels.len(),
+            TOOTHFUSE_LABEL_DOMAIN_VERTEX,
+        )
+    };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    for (&fdi, m) in &p.cbct {
+        let v: Vec<f64> = m.positions.iter().flat_map(|q| q.to_array()).collect();
+        let t: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        let st = s.add(TOOTHFUSE_MODALITY_CBCT, i32::from(fdi), &v, &t);
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    }
+}

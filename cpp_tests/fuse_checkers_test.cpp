@@ -1,0 +1,185 @@
+// Independent checkers of the one-call fuse on the synthetic jaws of the demo_jaws fixture
+// (TOOTHFUSE_JAWS_DIR/jaw_<k>, every variant, both jaws): every fused tooth must be closed and
+// manifold for VTK (vtkFeatureEdges: 0 boundary and 0 non-manifold edges; vtkMassProperties
+// volume > 0) and for OpenMesh (every face accepted by add_face, no boundary halfedge, no
+// non-manifold vertex, one component), and every IOS crown vertex must be in the fused tooth
+// (source IOS) at its position mapped by the tooth's IOS->output transform.
+#include "register_fuse_support.hpp"
+
+#include <vtkCellArray.h>
+#include <vtkFeatureEdges.h>
+#include <vtkMassProperties.h>
+#include <vtkNew.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace {
+
+struct Fused {
+  std::vector<double> xyz;
+  std::vector<uint32_t> tris;
+  std::vector<uint8_t> source;
+};
+
+Fused fused(tf::Session& s, int32_t fdi) {
+  Fused f;
+  size_t nv = 0, ni = 0;
+  EXPECT_EQ(toothfuse_session_fused_size(s.get(), fdi, &nv, &ni), TOOTHFUSE_STATUS_OK);
+  f.xyz.resize(3 * nv);
+  f.tris.resize(ni);
+  f.source.resize(nv);
+  EXPECT_EQ(toothfuse_session_copy_fused_vertices(s.get(), fdi, f.xyz.data(), nv,
+                                                  3 * sizeof(double), TOOTHFUSE_SCALAR_FLOAT64),
+            TOOTHFUSE_STATUS_OK);
+  EXPECT_EQ(toothfuse_session_copy_fused_indices(s.get(), fdi, f.tris.data(), ni),
+            TOOTHFUSE_STATUS_OK);
+  EXPECT_EQ(toothfuse_session_copy_fused_sources(s.get(), fdi, f.source.data(), nv),
+            TOOTHFUSE_STATUS_OK);
+  return f;
+}
+
+// VTK: 0 boundary and 0 non-manifold edges, positive volume.
+std::string vtk_check(const Fused& f) {
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  for (size_t i = 0; i < f.xyz.size() / 3; i++) pts->InsertNextPoint(&f.xyz[3 * i]);
+  vtkNew<vtkCellArray> polys;
+  for (size_t t = 0; t < f.tris.size() / 3; t++) {
+    vtkIdType ids[3] = {f.tris[3 * t], f.tris[3 * t + 1], f.tris[3 * t + 2]};
+    polys->InsertNextCell(3, ids);
+  }
+  vtkNew<vtkPolyData> pd;
+  pd->SetPoints(pts);
+  pd->SetPolys(polys);
+  vtkNew<vtkFeatureEdges> fe;
+  fe->SetInputData(pd);
+  fe->BoundaryEdgesOn();
+  fe->NonManifoldEdgesOn();
+  fe->FeatureEdgesOff();
+  fe->ManifoldEdgesOff();
+  fe->Update();
+  vtkIdType bad = fe->GetOutput()->GetNumberOfCells();
+  vtkNew<vtkMassProperties> mp;
+  mp->SetInputData(pd);
+  mp->Update();
+  double vol = mp->GetVolume();
+  std::string err;
+  if (bad != 0) err += "VTK: " + std::to_string(bad) + " boundary/non-manifold edges; ";
+  if (!(vol > 0.0)) err += "VTK: volume " + std::to_string(vol) + "; ";
+  return err;
+}
+
+// OpenMesh: every face accepted, no boundary halfedge, no non-manifold vertex, one component.
+std::string openmesh_check(const Fused& f) {
+  tf::MeshD m;
+  std::vector<tf::MeshD::VertexHandle> vh;
+  for (size_t i = 0; i < f.xyz.size() / 3; i++)
+    vh.push_back(m.add_vertex(tf::MeshD::Point(f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2])));
+  std::string err;
+  size_t rejected = 0;
+  for (size_t t = 0; t < f.tris.size() / 3; t++)
+    if (!m.add_face(vh[f.tris[3 * t]], vh[f.tris[3 * t + 1]], vh[f.tris[3 * t + 2]]).is_valid())
+      rejected++;
+  if (rejected) err += "OpenMesh: " + std::to_string(rejected) + " faces rejected; ";
+  size_t boundary = 0, nonmanifold = 0;
+  for (auto h : m.halfedges())
+    if (m.is_boundary(h)) boundary++;
+  for (auto v : m.vertices())
+    if (!m.is_manifold(v)) nonmanifold++;
+  if (boundary) err += "OpenMesh: " + std::to_string(boundary) + " boundary halfedges; ";
+  if (nonmanifold) err += "OpenMesh: " + std::to_string(nonmanifold) + " non-manifold vertices; ";
+  // Components by a flood fill over face neighbours.
+  std::vector<int> comp(m.n_faces(), -1);
+  int ncomp = 0;
+  for (auto f0 : m.faces()) {
+    if (comp[f0.idx()] >= 0) continue;
+    std::vector<tf::MeshD::FaceHandle> stack{f0};
+    comp[f0.idx()] = ncomp;
+    while (!stack.empty()) {
+      auto fh = stack.back();
+      stack.pop_back();
+      for (auto g : m.ff_range(fh))
+        if (comp[g.idx()] < 0) {
+          comp[g.idx()] = ncomp;
+          stack.push_back(g);
+        }
+    }
+    ncomp++;
+  }
+  if (ncomp != 1) err += "OpenMesh: " + std::to_string(ncomp) + " components; ";
+  return err;
+}
+
+// Every IOS crown vertex of the session, mapped by IOS->output, is a source-IOS vertex (to
+// 1e-9 mm: the library applies the same transform in Rust).
+std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f) {
+  tf::Mat4 m{};
+  if (toothfuse_session_transform(s.get(), fdi, TOOTHFUSE_TRANSFORM_IOS_TO_OUTPUT, m.data()) !=
+      TOOTHFUSE_STATUS_OK)
+    return "no transform; ";
+  std::vector<std::array<double, 3>> kept;
+  for (size_t i = 0; i < f.source.size(); i++)
+    if (f.source[i] == TOOTHFUSE_SOURCE_IOS)
+      kept.push_back({f.xyz[3 * i], f.xyz[3 * i + 1], f.xyz[3 * i + 2]});
+  std::sort(kept.begin(), kept.end());
+  std::vector<double> crown = s.positions(TOOTHFUSE_MODALITY_IOS, fdi);
+  size_t missing = 0;
+  for (size_t i = 0; i < crown.size() / 3; i++) {
+    auto q = tf::apply(m, &crown[3 * i]);
+    auto lo = std::lower_bound(kept.begin(), kept.end(),
+                               std::array<double, 3>{q[0] - 1e-9, -1e300, -1e300});
+    bool found = false;
+    for (auto it = lo; it != kept.end() && (*it)[0] <= q[0] + 1e-9 && !found; ++it)
+      found = std::abs((*it)[1] - q[1]) <= 1e-9 && std::abs((*it)[2] - q[2]) <= 1e-9;
+    if (!found) missing++;
+  }
+  if (missing) return std::to_string(missing) + " IOS crown vertices missing; ";
+  return "";
+}
+
+TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
+  const char* dir = std::getenv("TOOTHFUSE_JAWS_DIR");
+  ASSERT_NE(dir, nullptr) << "TOOTHFUSE_JAWS_DIR unset (the demo_jaws fixture sets it)";
+  size_t jaws = 0, teeth = 0, skipped = 0;
+  for (int k = 0;; k++) {
+    std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
+    if (!std::ifstream(jd + "/ios.ply").good()) break;
+    tf::Session s;
+    ASSERT_TRUE(tf::load_demo(s, jd, false)) << jd;
+    ASSERT_EQ(toothfuse_session_fuse(s.get(), nullptr), TOOTHFUSE_STATUS_OK)
+        << jd << ": " << s.error();
+    jaws++;
+    int32_t fdis[52];
+    size_t n = 0;
+    ASSERT_EQ(toothfuse_session_fused_teeth(s.get(), fdis, 52, &n), TOOTHFUSE_STATUS_OK);
+    size_t nskip = 0;
+    ASSERT_EQ(toothfuse_session_skipped_count(s.get(), &nskip), TOOTHFUSE_STATUS_OK);
+    for (size_t i = 0; i < nskip; i++) {
+      int32_t f = 0;
+      const char* why = nullptr;
+      ASSERT_EQ(toothfuse_session_skipped(s.get(), i, &f, &why), TOOTHFUSE_STATUS_OK);
+      std::printf("%s: tooth %d skipped: %s\n", jd.c_str(), f, why);
+      EXPECT_EQ(std::string(why).find("fusion failed"), std::string::npos)
+          << jd << ": tooth " << f << ": " << why;
+      skipped++;
+    }
+    for (size_t i = 0; i < n; i++) {
+      Fused f = fused(s, fdis[i]);
+      std::string err = vtk_check(f) + openmesh_check(f) + crown_check(s, fdis[i], f);
+      EXPECT_TRUE(err.empty()) << jd << " tooth " << fdis[i] << ": " << err;
+      toothfuse_fused_quality q{};
+      ASSERT_EQ(toothfuse_session_fused_quality(s.get(), fdis[i], &q), TOOTHFUSE_STATUS_OK);
+      EXPECT_TRUE(q.closed && q.manifold && q.watertight) << jd << " tooth " << fdis[i];
+      teeth++;
+    }
+  }
+  std::printf("checked %zu fused teeth of %zu jaws (%zu teeth skipped: one modality only)\n",
+              teeth, jaws, skipped);
+  EXPECT_GE(jaws, 20u);
+}
+
+}  // namespace
