@@ -162,7 +162,7 @@ pub fn optimize_band(
             break;
         }
     }
-    for _ in 0..8 {
+    for _ in 0..24 {
         relax_pass(mesh, band.clone(), movable.clone(), 0.5);
         flip_pass(mesh, band.clone());
     }
