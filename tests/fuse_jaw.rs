@@ -242,7 +242,7 @@ fn paper_preset_is_watertight_too() {
 }
 
 #[test]
-#[ignore = "known failing on the phantom: band faces at folded margins still cross crown faces (median ~50 pairs per tooth after the clean-up), band min angle ~1-2°, CBCT bias at the cut (~0.34 mm)"]
+#[ignore = "known failing on the phantom: band faces at folded margins still cross crown faces (median ~20 pairs per tooth after the clean-up), band min angle ~1-3°, CBCT bias at the cut (~0.34 mm)"]
 fn default_preset_strict_targets() {
     for jaw in [Jaw::Upper, Jaw::Lower] {
         let r = run(3, jaw, Variant::Full, Preset::Default);
@@ -251,9 +251,10 @@ fn default_preset_strict_targets() {
 }
 
 /// The band clean-up (min-angle flips, relaxation of band-interior vertices) on one jaw, measured
-/// against the same fusion without it: far fewer intersecting face pairs (measured: ~5× fewer;
-/// the rest are mostly band faces at the margin against crown faces where the margin folds, and
-/// the IOS crown's own intersections) and far fewer slivers (median band min angle ~0.3° → ~1.9°).
+/// against the same fusion without it: far fewer intersecting face pairs (measured: 4616 → 358,
+/// ~13× fewer; the rest are mostly band faces at the margin against crown faces where the margin
+/// folds, and the IOS crown's own intersections) and far fewer slivers (median band min angle
+/// 0.26° → 2.44°).
 #[test]
 fn band_clean_up_removes_most_intersections_and_slivers() {
     let p = match Phantom::generate(&PhantomOptions {
@@ -305,9 +306,9 @@ fn band_clean_up_removes_most_intersections_and_slivers() {
     };
     let (si_off, ang_off) = measure(false);
     let (si_on, ang_on) = measure(true);
-    assert!(si_on * 3 <= si_off, "intersections {si_off} -> {si_on}");
+    assert!(si_on * 8 <= si_off, "intersections {si_off} -> {si_on}");
     assert!(
-        ang_on >= 1.2 && ang_on >= 3.0 * ang_off,
+        ang_on >= 2.0 && ang_on >= 6.0 * ang_off,
         "median min angle {ang_off} -> {ang_on}"
     );
 }
