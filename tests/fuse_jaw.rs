@@ -242,10 +242,73 @@ fn paper_preset_is_watertight_too() {
 }
 
 #[test]
-#[ignore = "known failing on the phantom: band self-intersections near folded margins, sliver angles, CBCT bias at the cut"]
+#[ignore = "known failing on the phantom: band faces at folded margins still cross crown faces (median ~20 pairs per tooth after the clean-up), band min angle ~1-3°, CBCT bias at the cut (~0.34 mm)"]
 fn default_preset_strict_targets() {
     for jaw in [Jaw::Upper, Jaw::Lower] {
         let r = run(3, jaw, Variant::Full, Preset::Default);
         assert_strict(&r);
     }
+}
+
+/// The band clean-up (min-angle flips, relaxation of band-interior vertices) on one jaw, measured
+/// against the same fusion without it: far fewer intersecting face pairs (measured: 4616 → 358,
+/// ~13× fewer; the rest are mostly band faces at the margin against crown faces where the margin
+/// folds, and the IOS crown's own intersections) and far fewer slivers (median band min angle
+/// 0.26° → 2.44°).
+#[test]
+fn band_clean_up_removes_most_intersections_and_slivers() {
+    let p = match Phantom::generate(&PhantomOptions {
+        seed: 3,
+        jaw: Jaw::Upper,
+        variant: Variant::Full,
+        ..Default::default()
+    }) {
+        Ok(p) => p,
+        Err(e) => {
+            println!("SKIPPED: phantom unavailable ({e})");
+            return;
+        }
+    };
+    let transforms: BTreeMap<u8, ToothTransforms> = p
+        .truth
+        .teeth
+        .iter()
+        .map(|(&k, t)| {
+            (
+                k,
+                ToothTransforms {
+                    cbct_to_output: t.cbct_to_ios,
+                    ios_to_output: Rigid::IDENTITY,
+                },
+            )
+        })
+        .collect();
+    let measure = |optimize: bool| {
+        let mut o = FuseOptions::preset(Preset::Default);
+        o.stitch.optimize = optimize;
+        o.check_self_intersections = true;
+        let f = fuse_jaw(&p.ios, &p.cbct, &transforms, &o).expect("fuse_jaw");
+        let mut total = 0;
+        let mut angles = Vec::new();
+        for (fdi, t) in &f.teeth {
+            let q = &t.quality;
+            assert!(q.closed && q.manifold && q.components == 1, "tooth {fdi}");
+            assert_eq!(q.degenerate_faces, 0, "tooth {fdi}");
+            total += q.self_intersections.unwrap_or(usize::MAX);
+            angles.push(q.band_min_angle_deg);
+        }
+        angles.sort_by(f64::total_cmp);
+        let median = angles[angles.len() / 2];
+        println!(
+            "clean-up {optimize}: {total} intersecting pairs, median band min angle {median:.2}°"
+        );
+        (total, median)
+    };
+    let (si_off, ang_off) = measure(false);
+    let (si_on, ang_on) = measure(true);
+    assert!(si_on * 8 <= si_off, "intersections {si_off} -> {si_on}");
+    assert!(
+        ang_on >= 2.0 && ang_on >= 6.0 * ang_off,
+        "median min angle {ang_off} -> {ang_on}"
+    );
 }

@@ -2,6 +2,7 @@
 //! ([`crate::cut`]) and stitching ([`crate::stitch`]) into one watertight mesh; per jaw, all
 //! fused teeth in one mesh with per-vertex FDI labels and sources.
 
+mod band_opt;
 mod jaw;
 pub mod quality;
 mod tooth;
@@ -88,6 +89,7 @@ impl FuseOptions {
                 stitch: StitchOptions {
                     points: PointGeneration::Recursive(InterpOptions::default()),
                     tangent_scale: 0.0,
+                    optimize: false,
                 },
                 check_self_intersections: false,
                 pass_through_cbct_only: false,

@@ -194,6 +194,9 @@ fn fuse_inner(
     }
     mesh.triangles
         .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
+    if opts.stitch.optimize {
+        super::band_opt::optimize_band(&mut mesh, band_start..band_end, band_off..root_off);
+    }
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
     q.crown_vertices = kept_ios;
     q.holes_filled = rep.filled_holes;

@@ -55,6 +55,9 @@ pub struct StitchOptions {
     pub points: PointGeneration,
     /// Hermite tangent length as a fraction of the loop-to-loop distance (0: ruled band).
     pub tangent_scale: f64,
+    /// After assembly, improve the band in place: min-angle edge flips between band faces and
+    /// tangential relaxation of band-interior vertices (kept only if no intersection is added).
+    pub optimize: bool,
 }
 
 impl Default for StitchOptions {
@@ -62,6 +65,7 @@ impl Default for StitchOptions {
         Self {
             points: PointGeneration::Rings,
             tangent_scale: 0.8,
+            optimize: true,
         }
     }
 }
