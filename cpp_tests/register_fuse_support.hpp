@@ -8,8 +8,12 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include <vtkPLY.h>
+
 #include <array>
+#include <cstddef>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -24,7 +28,39 @@ using MeshD = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
 using Mat4 = std::array<double, 16>;  // row-major
 
-/// A labeled jaw read with OpenMesh: float points as read, double points converted from them.
+struct PlyVertexD {
+  double x, y, z;
+};
+
+/// The file's double x/y/z by VTK's low-level PLY reader (OpenMesh and vtkPLYReader parse
+/// coordinates as float, which can make thin triangles degenerate).
+inline bool read_doubles(const std::string& path, std::vector<double>& xyz) {
+  int nelems = 0;
+  char** names = nullptr;
+  PlyFile* ply = vtkPLY::ply_open_for_reading(path.c_str(), &nelems, &names);
+  if (!ply) return false;
+  for (int e = 0; e < nelems; e++) {
+    int num = 0, nprops = 0;
+    vtkPLY::ply_get_element_description(ply, names[e], &num, &nprops);
+    if (std::strcmp(names[e], "vertex") != 0) continue;
+    PlyProperty props[] = {
+        {"x", PLY_DOUBLE, PLY_DOUBLE, static_cast<int>(offsetof(PlyVertexD, x)), 0, 0, 0, 0},
+        {"y", PLY_DOUBLE, PLY_DOUBLE, static_cast<int>(offsetof(PlyVertexD, y)), 0, 0, 0, 0},
+        {"z", PLY_DOUBLE, PLY_DOUBLE, static_cast<int>(offsetof(PlyVertexD, z)), 0, 0, 0, 0},
+    };
+    for (PlyProperty& p : props) vtkPLY::ply_get_property(ply, "vertex", &p);
+    for (int i = 0; i < num; i++) {
+      PlyVertexD v{};
+      vtkPLY::ply_get_element(ply, &v);
+      xyz.insert(xyz.end(), {v.x, v.y, v.z});
+    }
+    break;
+  }
+  vtkPLY::ply_close(ply);
+  return true;
+}
+
+/// A labeled jaw: float points and faces as OpenMesh reads them, the file's exact doubles.
 struct LabeledJaw {
   std::vector<float> fxyz;
   std::vector<double> dxyz;
@@ -34,7 +70,6 @@ struct LabeledJaw {
 
 inline bool read_labeled_jaw(const std::string& path, LabeledJaw& out) {
   MeshF m;
-  m.add_property(OpenMesh::VPropHandleT<int>(), "label");
   OpenMesh::IO::Options opt = OpenMesh::IO::Options::Custom;
   if (!OpenMesh::IO::read_mesh(m, path, opt)) {
     ADD_FAILURE() << "OpenMesh could not read " << path;
@@ -53,6 +88,12 @@ inline bool read_labeled_jaw(const std::string& path, LabeledJaw& out) {
     }
     out.labels.push_back(m.property(lh, vh));
   }
+  std::vector<double> exact;
+  if (!read_doubles(path, exact) || exact.size() != out.dxyz.size()) {
+    ADD_FAILURE() << path << ": VTK's PLY reader disagrees with OpenMesh on the vertex count";
+    return false;
+  }
+  out.dxyz = exact;
   for (auto fh : m.faces())
     for (auto vh : m.fv_range(fh)) out.tris.push_back(static_cast<uint32_t>(vh.idx()));
   return true;
