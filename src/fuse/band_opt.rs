@@ -27,11 +27,13 @@ fn key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
-/// One pass of min-angle-raising flips of edges shared by two band faces. Returns the flips made.
-fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>) -> usize {
-    // Every undirected edge of the whole mesh (a flip must not create an existing edge).
+/// One pass of min-angle-raising flips of edges shared by two band faces. `faces` must hold
+/// every face that can hold an edge between two band vertices (the band faces and every face
+/// touching a loop vertex): a flip must not create an edge that exists. Returns the flips made.
+fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) -> usize {
     let mut edges: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
-    for (f, t) in mesh.triangles.iter().enumerate() {
+    for &f in faces {
+        let t = mesh.triangles[f];
         for k in 0..3 {
             edges.entry(key(t[k], t[(k + 1) % 3])).or_default().push(f);
         }
@@ -152,17 +154,18 @@ pub fn optimize_band(
     let si_before = mesh_check::self_intersections(mesh).len();
     let ang_before = band_min_angle(mesh, band.clone());
     let deg_before = mesh_check::degenerate_faces(mesh);
+    let all: Vec<usize> = (0..mesh.triangles.len()).collect();
     for _ in 0..6 {
-        if flip_pass(mesh, band.clone()) == 0 {
+        if flip_pass(mesh, band.clone(), &all) == 0 {
             break;
         }
     }
     for _ in 0..24 {
         relax_pass(mesh, band.clone(), movable.clone(), 0.5);
-        flip_pass(mesh, band.clone());
+        flip_pass(mesh, band.clone(), &all);
     }
     for _ in 0..4 {
-        if flip_pass(mesh, band.clone()) == 0 {
+        if flip_pass(mesh, band.clone(), &all) == 0 {
             break;
         }
     }
@@ -174,4 +177,28 @@ pub fn optimize_band(
         *mesh = before;
     }
     ok
+}
+
+/// Min-angle-raising edge flips between band faces only (no vertex moves, no global check):
+/// fast, keeps the mesh closed and manifold, and refuses flips that fold (see [`flip_pass`]).
+/// Returns the number of flips.
+pub fn flip_band(mesh: &mut TriMesh, band: std::ops::Range<usize>, passes: usize) -> usize {
+    let mut on_band = vec![false; mesh.positions.len()];
+    for f in band.clone() {
+        for v in mesh.triangles[f] {
+            on_band[v as usize] = true;
+        }
+    }
+    let faces: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&f| band.contains(&f) || mesh.triangles[f].iter().any(|&v| on_band[v as usize]))
+        .collect();
+    let mut total = 0;
+    for _ in 0..passes {
+        let n = flip_pass(mesh, band.clone(), &faces);
+        total += n;
+        if n == 0 {
+            break;
+        }
+    }
+    total
 }

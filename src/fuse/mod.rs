@@ -90,6 +90,7 @@ impl FuseOptions {
                     points: PointGeneration::Recursive(InterpOptions::default()),
                     tangent_scale: 0.0,
                     optimize: false,
+                    flips: false,
                 },
                 check_self_intersections: false,
                 pass_through_cbct_only: false,

@@ -196,6 +196,8 @@ fn fuse_inner(
         .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
     if opts.stitch.optimize {
         super::band_opt::optimize_band(&mut mesh, band_start..band_end, band_off..root_off);
+    } else if opts.stitch.flips {
+        super::band_opt::flip_band(&mut mesh, band_start..band_end, 6);
     }
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
     q.crown_vertices = kept_ios;

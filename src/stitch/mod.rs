@@ -9,6 +9,8 @@
 //! log-polar plane with both loops as constraint polygons — our replacement for the paper's
 //! DELAUNAY3D (line 7), which cannot guarantee the boundaries.
 
+pub mod chart;
+mod chart_band;
 pub mod interp;
 pub mod param;
 
@@ -40,7 +42,11 @@ pub struct BandLoops<'a> {
 /// Where the band's interior points come from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PointGeneration {
-    /// Ours: rings at heights graded from the margin's edge length to the cut's, points evenly
+    /// Ours (default): graded Poisson-disk points in a flat chart of the tooth side, lifted as a
+    /// radial graph (Hermite profile tangent to crown and root, harmonic fit to the loops); see
+    /// [`chart`]. Falls back to [`PointGeneration::Rings`] where the loops do not chart simply.
+    Chart,
+    /// Ours (earlier): rings at heights graded from the margin's edge length to the cut's, points evenly
     /// spaced on each ring, placed on the Hermite loft.
     Rings,
     /// Paper: Algorithm 1 recursive interpolation and voxel downsampling; the points keep their
@@ -57,15 +63,19 @@ pub struct StitchOptions {
     pub tangent_scale: f64,
     /// After assembly, improve the band in place: min-angle edge flips between band faces and
     /// tangential relaxation of band-interior vertices (kept only if no intersection is added).
+    /// Slow (exact intersection checks of the whole tooth); off by default.
     pub optimize: bool,
+    /// After assembly, min-angle edge flips between band faces only (fast, no vertex moves).
+    pub flips: bool,
 }
 
 impl Default for StitchOptions {
     fn default() -> Self {
         Self {
-            points: PointGeneration::Rings,
+            points: PointGeneration::Chart,
             tangent_scale: 0.8,
-            optimize: true,
+            optimize: false,
+            flips: true,
         }
     }
 }
@@ -117,21 +127,29 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
     let lo = order(loops.lower, "cut")?;
     let pick = |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
     let (up_pts, lo_pts) = (pick(loops.upper, &uo), pick(loops.lower, &lo));
+    let (up_dirs, lo_dirs) = (pick(loops.upper_dir, &uo), pick(loops.lower_dir, &lo));
+    if opts.points == PointGeneration::Chart {
+        let ordered = chart_band::OrderedLoops {
+            uo: &uo,
+            lo: &lo,
+            up_pts: &up_pts,
+            lo_pts: &lo_pts,
+            up_dirs: &up_dirs,
+            lo_dirs: &lo_dirs,
+        };
+        // Where the loops do not chart as one simple annulus: the loft rings below.
+        if let Ok(b) = chart_band::chart_band(loops, frame, opts, &ordered) {
+            return Ok(b);
+        }
+    }
     // The loft (where our interior points live) runs between smoothed copies of the loops, so the
     // loops' vertex-level jaggedness does not leak into the interior.
-    let upper = LoopParam::upper(
-        smooth(&up_pts, 8),
-        smooth_dirs(&pick(loops.upper_dir, &uo), 8),
-    )?;
-    let lower = LoopParam::lower_aligned(
-        smooth(&lo_pts, 4),
-        smooth_dirs(&pick(loops.lower_dir, &lo), 4),
-        &upper,
-        frame,
-    )?;
+    let upper = LoopParam::upper(smooth(&up_pts, 8), smooth_dirs(&up_dirs, 8))?;
+    let lower =
+        LoopParam::lower_aligned(smooth(&lo_pts, 4), smooth_dirs(&lo_dirs, 4), &upper, frame)?;
     let loft = Loft::new(upper, lower, opts.tangent_scale);
     let (interior, spacing): (Vec<ParamPoint>, Box<dyn Fn(f64) -> f64>) = match opts.points {
-        PointGeneration::Rings => {
+        PointGeneration::Rings | PointGeneration::Chart => {
             let (e_u, e_l) = (mean_edge(&up_pts), mean_edge(&lo_pts));
             (
                 rings(&loft, e_u, e_l),
@@ -174,7 +192,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         })
         .collect();
     match triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops) {
-        Ok(b) => Ok(b),
+        Ok((b, _)) => Ok(b),
         Err(first) => {
             // Fallback when a loop folds back around the axis (the cylindrical projection is not
             // simple): loops on concentric circles by their turn parameter, interior points by
@@ -193,6 +211,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
                 })
                 .collect();
             triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops)
+                .map(|(b, _)| b)
                 .map_err(|e| Error::InvalidArgument(format!("{first}; annulus fallback: {e}")))
         }
     }
@@ -201,7 +220,9 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
 /// Constrained Delaunay triangulation of the annulus between the polygons `up_xy` (outer,
 /// counter-clockwise) and `lo_xy` (inner, counter-clockwise), with interior points
 /// `(plane position, 3D position, minimum plane distance to the loops)`; keeps the triangles
-/// between the polygons. `uo`/`lo` map polygon order back to the caller's loop indices.
+/// between the polygons. `uo`/`lo` map polygon order back to the caller's loop indices. Also
+/// returns, per band point, its plane position and the index of the `interior` entry it is
+/// (`None`: a chord split).
 fn triangulate(
     up_xy: &[[f64; 2]],
     lo_xy: &[[f64; 2]],
@@ -209,7 +230,7 @@ fn triangulate(
     lo: &[u32],
     interior: &[([f64; 2], DVec3, f64)],
     loops: &BandLoops,
-) -> Result<Band> {
+) -> Result<(Band, Vec<PointOrigin>)> {
     let (nu, nl) = (up_xy.len(), lo_xy.len());
 
     let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
@@ -243,20 +264,20 @@ fn triangulate(
         lo_h.push(h);
     }
     let handles: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
-    for ring in [&up_h, &lo_h] {
+    for (ring, what) in [(&up_h, "margin"), (&lo_h, "cut")] {
         for i in 0..ring.len() {
             let (a, b) = (handles[ring[i]], handles[ring[(i + 1) % ring.len()]]);
             if !cdt.can_add_constraint(a, b) {
-                return Err(Error::InvalidArgument(
-                    "margin and cut loops cross each other (or themselves) around the tooth axis"
-                        .into(),
-                ));
+                return Err(Error::InvalidArgument(format!(
+                    "{what} loop edge {i} crosses another loop edge around the tooth axis"
+                )));
             }
             cdt.add_constraint(a, b);
         }
     }
     let mut points = Vec::new();
-    for &(xy, pos, min_d) in interior {
+    let mut origin = Vec::new();
+    for (k, &(xy, pos, min_d)) in interior.iter().enumerate() {
         if !pos.is_finite() {
             continue;
         }
@@ -275,6 +296,7 @@ fn triangulate(
         .is_some()
         {
             points.push(pos);
+            origin.push((xy, Some(k as u32)));
         }
     }
     // Chords: split any band edge that duplicates a crown/root chord with a point in its middle.
@@ -290,36 +312,42 @@ fn triangulate(
         BandVertex::Lower(i) => loops.lower[i as usize],
         BandVertex::Interior(i) => points[i as usize],
     };
-    let mut pending: Vec<(usize, usize, DVec3, DVec3)> = loops
+    let pending: Vec<(usize, usize, DVec3, DVec3)> = loops
         .chords
         .iter()
         .filter_map(|&(a, b)| Some((handle_of(a)?, handle_of(b)?, pos3(a), pos3(b))))
         .collect();
-    for _round in 0..8 {
+    // A chord edge is broken by a point at its middle; repeat while one survives (a middle
+    // that coincides with an existing vertex).
+    for _round in 0..4 {
         let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
-        let mut next = Vec::new();
+        let mut split = false;
         for &(a, b, pa, pb) in &pending {
             if let Some(e) = cdt.get_edge_from_neighbors(vh[a], vh[b]) {
                 let [va, vb] = e.vertices();
                 let (qa, qb) = (va.position(), vb.position());
                 let mid = [0.5 * (qa.x + qb.x), 0.5 * (qa.y + qb.y)];
-                let pm = 0.5 * (pa + pb);
-                if let Some(h) = cdt_insert(
+                // Only band edges matter: an edge outside the annulus is no band edge.
+                if !polygon_side(up_xy, mid).0 || polygon_side(lo_xy, mid).0 {
+                    continue;
+                }
+                if cdt_insert(
                     &mut cdt,
                     &mut handle_to_vertex,
                     mid,
                     BandVertex::Interior(points.len() as u32),
-                )? {
-                    points.push(pm);
-                    next.push((a, h, pa, pm));
-                    next.push((h, b, pm, pb));
+                )?
+                .is_some()
+                {
+                    points.push(0.5 * (pa + pb));
+                    origin.push((mid, None));
+                    split = true;
                 }
             }
         }
-        if next.is_empty() {
+        if !split {
             break;
         }
-        pending = next;
     }
     let triangles: Vec<[BandVertex; 3]> =
         band_faces_ordered(&cdt, &up_h, &lo_h, &handle_to_vertex)?;
@@ -331,10 +359,14 @@ fn triangulate(
             triangles.len()
         )));
     }
-    Ok(Band { points, triangles })
+    Ok((Band { points, triangles }, origin))
 }
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
+
+/// Where a band point came from: its plane position and the index of the interior input point it
+/// is (`None`: a chord split).
+type PointOrigin = ([f64; 2], Option<u32>);
 
 /// The triangles between the two loop polygons (counter-clockwise in the plane).
 fn band_faces_ordered(

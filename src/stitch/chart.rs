@@ -1,0 +1,746 @@
+//! Ours (the default band): the gap between the two loops is meshed in a flat chart of the
+//! tooth's side and lifted back to 3D as a radial graph over that chart.
+//!
+//! * Chart: `x` = arc length along a strongly smoothed copy of the IOS margin seen along the
+//!   tooth axis ([`RefCurve`]), `y` = height along the axis; a point's third coordinate is its
+//!   horizontal offset along the curve's normal. Near the cervical line the tooth side is steep,
+//!   so the chart is close to isometric there and planar angles survive the lift.
+//! * Points: a graded, deterministic Poisson-disk sample of the region between the two loop
+//!   polylines ([`sample`]): spacing from the margin's edge length at the top to the cut's at the
+//!   bottom, kept clear of loop vertices and edges so no sliver forms against a loop.
+//! * Lift: every interior point keeps its chart position; its offset is a cubic Hermite profile
+//!   between the smoothed loops (tangent to crown and root) plus a harmonic correction that makes
+//!   it meet the real, jagged loop vertices exactly. A graph over a planar triangulation cannot
+//!   fold onto itself, and the crown (above the margin in the chart) and the root (below the
+//!   cut) are graphs over regions the band does not cover, so the band stays clear of them.
+
+use crate::cut::ToothFrame;
+use crate::{Error, Result};
+use glam::DVec3;
+
+/// Wraps `d` into `(-period/2, period/2]`.
+fn wrap(d: f64, period: f64) -> f64 {
+    d - period * (d / period).round()
+}
+
+/// The chart's reference: a strongly smoothed copy of the margin, projected along the axis. A
+/// point's chart `x` is the arc length of its horizontal projection's closest point on this
+/// curve, its offset the signed horizontal distance along the curve's outward normal.
+#[derive(Clone, Debug)]
+pub struct RefCurve {
+    frame: ToothFrame,
+    /// Horizontal positions relative to the frame center.
+    pts: Vec<DVec3>,
+    /// Unit outward horizontal normals at the vertices.
+    normals: Vec<DVec3>,
+    /// Arc length at each vertex.
+    s: Vec<f64>,
+    /// Length of the curve (the chart's period, mm).
+    pub length: f64,
+}
+
+impl RefCurve {
+    /// The reference curve of `pts` (closed, counter-clockwise about `frame`'s axis).
+    pub fn new(frame: &ToothFrame, pts: &[DVec3]) -> Result<RefCurve> {
+        let n = pts.len();
+        if n < 3 {
+            return Err(Error::InvalidArgument("reference loop too short".into()));
+        }
+        let hp: Vec<DVec3> = pts
+            .iter()
+            .map(|&p| {
+                let d = p - frame.center;
+                d - d.dot(frame.axis) * frame.axis
+            })
+            .collect();
+        let mut s = Vec::with_capacity(n);
+        let mut length = 0.0;
+        let mut area = 0.0;
+        for i in 0..n {
+            s.push(length);
+            let (a, b) = (hp[i], hp[(i + 1) % n]);
+            length += (b - a).length();
+            area += a.cross(b).dot(frame.axis);
+        }
+        if !(length.is_finite() && length > 0.0) || area <= 0.0 {
+            return Err(Error::InvalidArgument(
+                "margin loop does not run counter-clockwise around the tooth axis".into(),
+            ));
+        }
+        let normals = (0..n)
+            .map(|i| {
+                let t = hp[(i + 1) % n] - hp[(i + n - 1) % n];
+                t.cross(frame.axis).normalize_or_zero()
+            })
+            .collect();
+        Ok(Self {
+            frame: *frame,
+            pts: hp,
+            normals,
+            s,
+            length,
+        })
+    }
+
+    /// Chart `x` and signed offset of `p`'s horizontal projection.
+    pub fn locate(&self, p: DVec3) -> (f64, f64) {
+        let d = p - self.frame.center;
+        let q = d - d.dot(self.frame.axis) * self.frame.axis;
+        let n = self.pts.len();
+        let mut best = (f64::INFINITY, 0usize, 0.0);
+        for i in 0..n {
+            let (a, b) = (self.pts[i], self.pts[(i + 1) % n]);
+            let e = b - a;
+            let l2 = e.length_squared();
+            let t = if l2 > 0.0 {
+                ((q - a).dot(e) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let d2 = (a + t * e - q).length_squared();
+            if d2 < best.0 {
+                best = (d2, i, t);
+            }
+        }
+        let (_, i, t) = best;
+        let j = (i + 1) % n;
+        let seg = (self.pts[j] - self.pts[i]).length();
+        let base = self.pts[i].lerp(self.pts[j], t);
+        let nrm = self.normals[i].lerp(self.normals[j], t).normalize_or_zero();
+        (self.s[i] + t * seg, (q - base).dot(nrm))
+    }
+
+    /// Base point (horizontal, relative to the center) and unit normal at chart `x`.
+    fn at(&self, x: f64) -> (DVec3, DVec3) {
+        let n = self.pts.len();
+        let x = x.rem_euclid(self.length);
+        let k = self.s.partition_point(|&t| t <= x).clamp(1, n);
+        let i = k - 1;
+        let j = k % n;
+        let end = if k == n { self.length } else { self.s[k] };
+        let t = if end > self.s[i] {
+            ((x - self.s[i]) / (end - self.s[i])).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (
+            self.pts[i].lerp(self.pts[j], t),
+            self.normals[i].lerp(self.normals[j], t).normalize_or_zero(),
+        )
+    }
+}
+
+/// The horizontal convex hull of `pts` about `frame`'s axis, resampled at `spacing` and
+/// smoothed (`iters` passes of (1, 2, 1)/4, which keep it convex), counter-clockwise, at height
+/// 0 — a reference curve whose inward normal offsets do not fold over concave tooth sides.
+pub fn convex_reference(
+    frame: &ToothFrame,
+    pts: &[DVec3],
+    spacing: f64,
+    iters: usize,
+) -> Vec<DVec3> {
+    let mut q: Vec<[f64; 2]> = pts
+        .iter()
+        .map(|&p| {
+            let d = p - frame.center;
+            [d.dot(frame.e1), d.dot(frame.e2)]
+        })
+        .collect();
+    q.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    q.dedup();
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull: Vec<[f64; 2]> = Vec::with_capacity(q.len() + 1);
+    for pass in 0..2 {
+        let start = hull.len();
+        let it: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(q.iter())
+        } else {
+            Box::new(q.iter().rev())
+        };
+        for &p in it {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    // Resample uniformly.
+    let n = hull.len();
+    let mut out: Vec<[f64; 2]> = Vec::new();
+    if n < 3 {
+        return Vec::new();
+    }
+    for i in 0..n {
+        let (a, b) = (hull[i], hull[(i + 1) % n]);
+        let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let k = ((len / spacing).ceil() as usize).max(1);
+        for j in 0..k {
+            let t = j as f64 / k as f64;
+            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    }
+    let m = out.len();
+    for _ in 0..iters {
+        out = (0..m)
+            .map(|i| {
+                let (a, b, c) = (out[(i + m - 1) % m], out[i], out[(i + 1) % m]);
+                [
+                    0.25 * (a[0] + 2.0 * b[0] + c[0]),
+                    0.25 * (a[1] + 2.0 * b[1] + c[1]),
+                ]
+            })
+            .collect();
+    }
+    out.iter()
+        .map(|p| frame.center + p[0] * frame.e1 + p[1] * frame.e2)
+        .collect()
+}
+
+/// A smoothed loop as periodic functions of the chart `x`: height, offset from the reference
+/// curve and slope `d(offset)/dy` of the adjacent surface.
+#[derive(Clone, Debug)]
+struct Profile {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    r: Vec<f64>,
+    s: Vec<f64>,
+    period: f64,
+}
+
+impl Profile {
+    fn new(frame: &ToothFrame, rc: &RefCurve, pts: &[DVec3], dirs: &[DVec3]) -> Profile {
+        let period = rc.length;
+        let mut rows: Vec<(f64, f64, f64, f64)> = pts
+            .iter()
+            .zip(dirs)
+            .map(|(&p, &d)| {
+                let (x, r) = rc.locate(p);
+                let (_, nrm) = rc.at(x);
+                let s = (d.dot(nrm) / d.dot(frame.axis).max(0.3)).clamp(-1.5, 1.5);
+                (x, frame.height(p), r, s)
+            })
+            .collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Profile {
+            x: rows.iter().map(|r| r.0).collect(),
+            y: rows.iter().map(|r| r.1).collect(),
+            r: rows.iter().map(|r| r.2).collect(),
+            s: rows.iter().map(|r| r.3).collect(),
+            period,
+        }
+    }
+
+    /// `(y, r, s)` at chart `x` (periodic linear interpolation).
+    fn at(&self, x: f64) -> (f64, f64, f64) {
+        let n = self.x.len();
+        let x = x.rem_euclid(self.period);
+        let k = self.x.partition_point(|&t| t <= x);
+        if k == 0 || k == n {
+            let (x0, x1) = (self.x[n - 1], self.x[0] + self.period);
+            let xx = if k == 0 { x + self.period } else { x };
+            let t = if x1 > x0 { (xx - x0) / (x1 - x0) } else { 0.0 };
+            return self.lerp(n - 1, 0, t.clamp(0.0, 1.0));
+        }
+        let (x0, x1) = (self.x[k - 1], self.x[k]);
+        let t = if x1 > x0 { (x - x0) / (x1 - x0) } else { 0.0 };
+        self.lerp(k - 1, k, t.clamp(0.0, 1.0))
+    }
+
+    fn lerp(&self, i: usize, j: usize, t: f64) -> (f64, f64, f64) {
+        let l = |v: &[f64]| v[i] + (v[j] - v[i]) * t;
+        (l(&self.y), l(&self.r), l(&self.s))
+    }
+}
+
+/// The lift from the chart to 3D: Hermite offset profile between the smoothed loops.
+#[derive(Clone, Debug)]
+pub struct Lift {
+    frame: ToothFrame,
+    curve: RefCurve,
+    upper: Profile,
+    lower: Profile,
+    tangent_scale: f64,
+}
+
+impl Lift {
+    /// Builds the lift from the reference curve and the smoothed loops with their surface
+    /// directions (see [`super::BandLoops`]).
+    pub fn new(
+        frame: &ToothFrame,
+        curve: RefCurve,
+        upper: (&[DVec3], &[DVec3]),
+        lower: (&[DVec3], &[DVec3]),
+        tangent_scale: f64,
+    ) -> Lift {
+        let up = Profile::new(frame, &curve, upper.0, upper.1);
+        let lo = Profile::new(frame, &curve, lower.0, lower.1);
+        Lift {
+            frame: *frame,
+            curve,
+            upper: up,
+            lower: lo,
+            tangent_scale,
+        }
+    }
+
+    /// Chart period (the reference curve's length, mm).
+    pub fn period(&self) -> f64 {
+        self.curve.length
+    }
+
+    /// Chart coordinates and offset of a 3D point.
+    pub fn chart(&self, p: DVec3) -> ([f64; 2], f64) {
+        let (x, r) = self.curve.locate(p);
+        ([x, self.frame.height(p)], r)
+    }
+
+    /// The Hermite profile's offset at chart point `c`.
+    pub fn profile_offset(&self, c: [f64; 2]) -> f64 {
+        let (yu, ru, su) = self.upper.at(c[0]);
+        let (yl, rl, sl) = self.lower.at(c[0]);
+        let h = yu - yl;
+        if h.abs() < 1e-9 {
+            return 0.5 * (ru + rl);
+        }
+        let (mu, ml) = (self.tangent_scale * su * h, self.tangent_scale * sl * h);
+        // Beyond the smoothed loops (notches, jagged margins) the profile stays flat; the
+        // harmonic correction carries the real loops' offsets there.
+        let t = ((c[1] - yl) / h).clamp(0.0, 1.0);
+        let (t2, t3) = (t * t, t * t * t);
+        (2.0 * t3 - 3.0 * t2 + 1.0) * rl
+            + (t3 - 2.0 * t2 + t) * ml
+            + (-2.0 * t3 + 3.0 * t2) * ru
+            + (t3 - t2) * mu
+    }
+
+    /// The 3D point at chart `c` and offset `r`.
+    pub fn point(&self, c: [f64; 2], r: f64) -> DVec3 {
+        let (base, nrm) = self.curve.at(c[0]);
+        self.frame.center + c[1] * self.frame.axis + base + r * nrm
+    }
+}
+
+/// Options of the chart sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleOptions {
+    /// Edge length at the margin (mm).
+    pub e_upper: f64,
+    /// Edge length at the cut (mm).
+    pub e_lower: f64,
+    /// Poisson-disk radius as a fraction of the local edge length.
+    pub radius: f64,
+    /// Smallest distance from a loop edge as a fraction of the local edge length.
+    pub clearance: f64,
+}
+
+/// Uniform grid over the periodic strip `[0, period) × [y0, y1]`.
+struct Grid {
+    period: f64,
+    cw: f64,
+    nx: usize,
+    y0: f64,
+    ch: f64,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl Grid {
+    fn new(period: f64, y0: f64, y1: f64, cell: f64) -> Grid {
+        let nx = ((period / cell).floor() as usize).max(1);
+        let ny = (((y1 - y0) / cell).ceil() as usize).max(1) + 2;
+        Grid {
+            period,
+            cw: period / nx as f64,
+            nx,
+            y0: y0 - cell,
+            ch: cell,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        }
+    }
+
+    fn cell_of(&self, p: [f64; 2]) -> (i64, i64) {
+        (
+            (p[0].rem_euclid(self.period) / self.cw).floor() as i64,
+            ((p[1] - self.y0) / self.ch).floor() as i64,
+        )
+    }
+
+    fn index(&self, cx: i64, cy: i64) -> Option<usize> {
+        if cy < 0 || cy >= self.ny as i64 {
+            return None;
+        }
+        Some(cy as usize * self.nx + cx.rem_euclid(self.nx as i64) as usize)
+    }
+
+    /// Inserts `id` into every cell overlapping the box of `a`–`b` (`b` unwrapped near `a`).
+    fn insert_box(&mut self, id: u32, a: [f64; 2], b: [f64; 2]) {
+        let fx = |x: f64| (x / self.cw).floor() as i64;
+        let fy = |y: f64| ((y - self.y0) / self.ch).floor() as i64;
+        let (x0, x1) = (fx(a[0].min(b[0])), fx(a[0].max(b[0])));
+        let (y0, y1) = (fy(a[1].min(b[1])), fy(a[1].max(b[1])));
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                if let Some(i) = self.index(cx, cy)
+                    && self.cells[i].last() != Some(&id)
+                {
+                    self.cells[i].push(id);
+                }
+            }
+        }
+    }
+
+    /// Ids in the 3×3 cells around `p` (may repeat).
+    fn near(&self, p: [f64; 2], mut f: impl FnMut(u32) -> bool) -> bool {
+        let (cx, cy) = self.cell_of(p);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(i) = self.index(cx + dx, cy + dy) {
+                    for &id in &self.cells[i] {
+                        if !f(id) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Squared distance from `p` to segment `a`–`b` in the periodic strip.
+fn seg_dist2(p: [f64; 2], a: [f64; 2], b: [f64; 2], period: f64) -> f64 {
+    let ax = p[0] + wrap(a[0] - p[0], period);
+    let bx = ax + wrap(b[0] - a[0], period);
+    let (ex, ey) = (bx - ax, b[1] - a[1]);
+    let l2 = ex * ex + ey * ey;
+    let t = if l2 > 0.0 {
+        (((p[0] - ax) * ex + (p[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (dx, dy) = (ax + t * ex - p[0], a[1] + t * ey - p[1]);
+    dx * dx + dy * dy
+}
+
+/// Graded Poisson-disk sample of the region between the upper polyline `up` and the lower
+/// polyline `lo` (chart coordinates, both closed and running once around the periodic strip).
+/// Returned points have `x` in `[0, period)`.
+pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) -> Vec<[f64; 2]> {
+    let e_min = o.e_upper.min(o.e_lower);
+    let e_max = o.e_upper.max(o.e_lower);
+    let step = 0.25 * e_min;
+    let ncols = ((period / (step * 0.866)).ceil() as usize).max(3);
+    let cx = period / ncols as f64;
+    // Crossings of every column x_k = (k + ½)·cx with both loops: (y, is_upper).
+    let mut cross: Vec<Vec<(f64, bool)>> = vec![Vec::new(); ncols];
+    for (is_up, lp) in [(true, up), (false, lo)] {
+        let n = lp.len();
+        for i in 0..n {
+            let a = lp[i];
+            let b = lp[(i + 1) % n];
+            let dx = wrap(b[0] - a[0], period);
+            if dx == 0.0 {
+                continue;
+            }
+            let (x0, x1) = (a[0].min(a[0] + dx), a[0].max(a[0] + dx));
+            let k0 = (x0 / cx - 0.5).ceil() as i64;
+            let k1 = (x1 / cx - 0.5).ceil() as i64;
+            for k in k0..k1 {
+                let xk = (k as f64 + 0.5) * cx;
+                let y = a[1] + (xk - a[0]) / dx * (b[1] - a[1]);
+                cross[k.rem_euclid(ncols as i64) as usize].push((y, is_up));
+            }
+        }
+    }
+    // Candidates: a column-aligned hexagonal lattice inside the region, each with its size.
+    let mut cand: Vec<(f64, [f64; 2], f64)> = Vec::new(); // (priority, point, size)
+    let mut y_lo = f64::INFINITY;
+    let mut y_hi = f64::NEG_INFINITY;
+    for (k, c) in cross.iter_mut().enumerate() {
+        c.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let xk = (k as f64 + 0.5) * cx;
+        let shift = if k % 2 == 1 { 0.5 } else { 0.0 };
+        let (mut pu, mut pl) = (false, false);
+        for w in 0..c.len() {
+            if c[w].1 {
+                pu = !pu;
+            } else {
+                pl = !pl;
+            }
+            if !pu || pl || w + 1 >= c.len() {
+                continue;
+            }
+            let (top, bottom) = (c[w], c[w + 1]);
+            let h = top.0 - bottom.0;
+            if h <= 0.0 {
+                continue;
+            }
+            y_lo = y_lo.min(bottom.0);
+            y_hi = y_hi.max(top.0);
+            let j0 = (bottom.0 / step - shift).floor() as i64 + 1;
+            let j1 = (top.0 / step - shift).ceil() as i64 - 1;
+            for j in j0..=j1 {
+                let y = (j as f64 + shift) * step;
+                if y <= bottom.0 || y >= top.0 {
+                    continue;
+                }
+                let t = (y - bottom.0) / h;
+                let size = match (top.1, bottom.1) {
+                    (true, false) => o.e_lower + (o.e_upper - o.e_lower) * t,
+                    (true, true) => o.e_upper,
+                    (false, false) => o.e_lower,
+                    (false, true) => 0.5 * (o.e_upper + o.e_lower),
+                };
+                cand.push((1.0 - t, [xk, y], size));
+            }
+        }
+    }
+    if cand.is_empty() {
+        return Vec::new();
+    }
+    cand.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then(a.1[0].total_cmp(&b.1[0]))
+            .then(a.1[1].total_cmp(&b.1[1]))
+    });
+    // Greedy acceptance against loop vertices, loop edges and accepted points.
+    let cell = o.radius.max(o.clearance) * e_max;
+    for lp in [up, lo] {
+        for p in lp {
+            y_lo = y_lo.min(p[1]);
+            y_hi = y_hi.max(p[1]);
+        }
+    }
+    let mut pts: Vec<([f64; 2], f64)> = Vec::new();
+    let mut pgrid = Grid::new(period, y_lo, y_hi, cell);
+    let mut sgrid = Grid::new(period, y_lo, y_hi, cell);
+    let mut segs: Vec<([f64; 2], [f64; 2])> = Vec::new();
+    for (lp, e) in [(up, o.e_upper), (lo, o.e_lower)] {
+        let n = lp.len();
+        for i in 0..n {
+            let a = lp[i];
+            let b = lp[(i + 1) % n];
+            let id = pts.len() as u32;
+            pgrid.insert_box(id, a, a);
+            pts.push(([a[0].rem_euclid(period), a[1]], e));
+            let sid = segs.len() as u32;
+            let bu = [a[0] + wrap(b[0] - a[0], period), b[1]];
+            sgrid.insert_box(sid, a, bu);
+            segs.push((a, b));
+        }
+    }
+    let n_fixed = pts.len();
+    for &(_, p, e) in &cand {
+        let ok_pts = pgrid.near(p, |id| {
+            let (q, eq) = pts[id as usize];
+            let r = o.radius * 0.5 * (e + eq);
+            let dx = wrap(p[0] - q[0], period);
+            let dy = p[1] - q[1];
+            dx * dx + dy * dy >= r * r
+        });
+        if !ok_pts {
+            continue;
+        }
+        let c2 = (o.clearance * e).powi(2);
+        let ok_segs = sgrid.near(p, |id| {
+            let (a, b) = segs[id as usize];
+            seg_dist2(p, a, b, period) >= c2
+        });
+        if !ok_segs {
+            continue;
+        }
+        let id = pts.len() as u32;
+        pgrid.insert_box(id, p, p);
+        pts.push((p, e));
+    }
+    pts[n_fixed..].iter().map(|&(p, _)| p).collect()
+}
+
+/// Harmonic interpolation over a triangulation in chart coordinates: `values[i]` is kept where
+/// `fixed[i]`, the others solve the discrete Laplace equation (cotangent weights, clamped
+/// positive) by Gauss–Seidel sweeps in index order (deterministic).
+pub fn harmonic(
+    chart: &[[f64; 2]],
+    period: f64,
+    triangles: &[[u32; 3]],
+    fixed: &[bool],
+    values: &mut [f64],
+) {
+    let n = chart.len();
+    let mut edges: Vec<(u32, u32, f64)> = Vec::with_capacity(triangles.len() * 6);
+    for t in triangles {
+        let p0 = chart[t[0] as usize];
+        let loc = |v: u32| {
+            let q = chart[v as usize];
+            [p0[0] + wrap(q[0] - p0[0], period), q[1]]
+        };
+        let c = [loc(t[0]), loc(t[1]), loc(t[2])];
+        for k in 0..3 {
+            let (a, b, o) = (c[(k + 1) % 3], c[(k + 2) % 3], c[k]);
+            let (ux, uy) = (a[0] - o[0], a[1] - o[1]);
+            let (vx, vy) = (b[0] - o[0], b[1] - o[1]);
+            let cross = (ux * vy - uy * vx).abs();
+            let w = if cross > 0.0 {
+                0.5 * (ux * vx + uy * vy) / cross
+            } else {
+                0.0
+            };
+            let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            edges.push((i, j, w));
+            edges.push((j, i, w));
+        }
+    }
+    edges.sort_by_key(|e| (e.0, e.1));
+    let mut start = vec![0usize; n + 1];
+    let mut adj: Vec<(u32, f64)> = Vec::with_capacity(edges.len() / 2);
+    let mut k = 0;
+    for (i, st) in start.iter_mut().enumerate().take(n) {
+        *st = adj.len();
+        while k < edges.len() && edges[k].0 as usize == i {
+            let j = edges[k].1;
+            let mut w = 0.0;
+            while k < edges.len() && edges[k].0 as usize == i && edges[k].1 == j {
+                w += edges[k].2;
+                k += 1;
+            }
+            adj.push((j, w.max(0.02)));
+        }
+    }
+    start[n] = adj.len();
+    for _ in 0..400 {
+        let mut change: f64 = 0.0;
+        for i in 0..n {
+            if fixed[i] || start[i] == start[i + 1] {
+                continue;
+            }
+            let (mut s, mut ws) = (0.0, 0.0);
+            for &(j, w) in &adj[start[i]..start[i + 1]] {
+                s += w * values[j as usize];
+                ws += w;
+            }
+            let v = s / ws;
+            change = change.max((v - values[i]).abs());
+            values[i] = v;
+        }
+        if change < 1e-7 {
+            break;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::TAU;
+
+    fn circle(r: f64, z: f64, n: usize, wobble: f64) -> Vec<DVec3> {
+        (0..n)
+            .map(|i| {
+                let a = TAU * i as f64 / n as f64;
+                DVec3::new(r * a.cos(), r * a.sin(), z + wobble * (7.0 * a).sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ref_curve_round_trips() {
+        let f = ToothFrame::new(DVec3::ZERO, DVec3::Z);
+        let pts = circle(3.0, 0.0, 400, 0.1);
+        let c = RefCurve::new(&f, &pts).unwrap();
+        assert!((c.length - TAU * 3.0).abs() < 0.01);
+        for k in 0..50 {
+            let x = c.length * k as f64 / 50.0;
+            for r in [-0.4, 0.0, 0.3] {
+                let (base, nrm) = c.at(x);
+                let p = base + r * nrm + DVec3::Z * 0.7;
+                let (x2, r2) = c.locate(p);
+                assert!(wrap(x2 - x, c.length).abs() < 5e-3, "{x} {x2}");
+                assert!((r2 - r).abs() < 1e-3, "{r} {r2}");
+            }
+        }
+        let rev: Vec<DVec3> = pts.iter().rev().copied().collect();
+        assert!(RefCurve::new(&f, &rev).is_err(), "clockwise loop refused");
+    }
+
+    #[test]
+    fn sample_is_inside_spaced_and_clear_of_loops() {
+        let period = 20.0;
+        let up: Vec<[f64; 2]> = (0..200)
+            .map(|i| {
+                let x = period * i as f64 / 200.0;
+                [x, 1.0 + 0.2 * (x * 3.0).sin()]
+            })
+            .collect();
+        let lo: Vec<[f64; 2]> = (0..70)
+            .map(|i| [period * i as f64 / 70.0, -0.3 * (x_of(i) * 0.5).cos()])
+            .collect();
+        fn x_of(i: usize) -> f64 {
+            20.0 * i as f64 / 70.0
+        }
+        let o = SampleOptions {
+            e_upper: 0.1,
+            e_lower: 0.3,
+            radius: 0.8,
+            clearance: 0.5,
+        };
+        let s = sample(&up, &lo, period, &o);
+        assert!(s.len() > 500, "{} points", s.len());
+        for p in &s {
+            let k = ((p[0] / period * 200.0).floor() as usize).min(199);
+            let top = up[k][1].max(up[(k + 1) % 200][1]);
+            let kl = ((p[0] / period * 70.0).floor() as usize).min(69);
+            let bottom = lo[kl][1].min(lo[(kl + 1) % 70][1]);
+            assert!(p[1] < top && p[1] > bottom, "{p:?} outside");
+            for q in up.iter().chain(&lo) {
+                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                assert!(
+                    d >= 0.8 * 0.5 * (0.1 + 0.1) - 1e-12,
+                    "{p:?} too close to {q:?}"
+                );
+            }
+        }
+        for (i, p) in s.iter().enumerate() {
+            for q in &s[i + 1..] {
+                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                assert!(d >= 0.8 * 0.1 - 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn harmonic_interpolates_linear_data_exactly() {
+        // A strip triangulated as a grid: linear boundary data → linear interior.
+        let (nx, ny) = (12usize, 5usize);
+        let period = nx as f64;
+        let mut chart = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                chart.push([i as f64, j as f64]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * nx + i % nx) as u32;
+        let mut tris = Vec::new();
+        for j in 0..ny - 1 {
+            for i in 0..nx {
+                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let fixed: Vec<bool> = chart.iter().map(|p| p[1] == 0.0 || p[1] == 4.0).collect();
+        let mut v: Vec<f64> = chart
+            .iter()
+            .zip(&fixed)
+            .map(|(p, &f)| if f { 2.0 * p[1] + 1.0 } else { 0.0 })
+            .collect();
+        harmonic(&chart, period, &tris, &fixed, &mut v);
+        for (p, x) in chart.iter().zip(&v) {
+            assert!((x - (2.0 * p[1] + 1.0)).abs() < 1e-5, "{p:?} {x}");
+        }
+    }
+}

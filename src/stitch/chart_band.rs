@@ -1,0 +1,197 @@
+//! Glue of the default band ([`super::PointGeneration::Chart`]): loops into the chart, graded
+//! sample, constrained Delaunay triangulation in the annulus plane, harmonic lift to 3D.
+
+use super::chart::{Lift, RefCurve, SampleOptions, convex_reference, harmonic, sample};
+use super::{
+    Band, BandLoops, BandVertex, StitchOptions, mean_edge, smooth, smooth_dirs, triangulate,
+};
+use crate::cut::ToothFrame;
+use crate::{Error, Result};
+use glam::DVec3;
+use std::f64::consts::TAU;
+
+/// The loops, ordered counter-clockwise about the axis, with their caller indices.
+pub(super) struct OrderedLoops<'a> {
+    pub uo: &'a [u32],
+    pub lo: &'a [u32],
+    pub up_pts: &'a [DVec3],
+    pub lo_pts: &'a [DVec3],
+    pub up_dirs: &'a [DVec3],
+    pub lo_dirs: &'a [DVec3],
+}
+
+/// Builds the chart band; an error means the loops do not project to a simple annulus in the
+/// chart (the caller falls back to the loft rings).
+pub(super) fn chart_band(
+    loops: &BandLoops,
+    frame: &ToothFrame,
+    opts: &StitchOptions,
+    o: &OrderedLoops,
+) -> Result<Band> {
+    let up_s = smooth(o.up_pts, 8);
+    let up_d = smooth_dirs(o.up_dirs, 8);
+    let lo_s = smooth(o.lo_pts, 4);
+    let lo_d = smooth_dirs(o.lo_dirs, 4);
+    let hull_pts: Vec<DVec3> = up_s.iter().chain(&lo_s).copied().collect();
+    let curve = RefCurve::new(frame, &convex_reference(frame, &hull_pts, 0.1, 200))?;
+    let lift = Lift::new(
+        frame,
+        curve,
+        (&up_s, &up_d),
+        (&lo_s, &lo_d),
+        opts.tangent_scale,
+    );
+    let period = lift.period();
+    let unwrap = |pts: &[DVec3], what: &str| -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
+        let mut out: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
+        let mut off = Vec::with_capacity(pts.len());
+        for &p in pts {
+            let (mut c, r) = lift.chart(p);
+            if let Some(prev) = out.last() {
+                c[0] = prev[0] + wrap(c[0] - prev[0], period);
+            }
+            out.push(c);
+            off.push(r);
+        }
+        let (first, last) = (out[0][0], out[out.len() - 1][0]);
+        let total = last + wrap(first - last, period) - first;
+        if (total - period).abs() > 1e-6 * period {
+            return Err(Error::InvalidArgument(format!(
+                "{what} loop runs {:.2} times around the chart",
+                total / period
+            )));
+        }
+        Ok((out, off))
+    };
+    let (up_c, up_r) = unwrap(o.up_pts, "margin")?;
+    let (lo_c, lo_r) = unwrap(o.lo_pts, "cut")?;
+    let so = SampleOptions {
+        e_upper: mean_edge(o.up_pts),
+        e_lower: mean_edge(o.lo_pts),
+        radius: 0.8,
+        clearance: 0.5,
+    };
+    // First the loops as they chart; if a loop folds back over itself there, again with its
+    // chart positions made monotone along the loop (least-squares, pool adjacent violators).
+    let mut attempt = 0;
+    let (mut up_c, mut lo_c) = (up_c, lo_c);
+    let (inner, y0, (mut band, origin)) = loop {
+        let inner = sample(&up_c, &lo_c, period, &so);
+        let y0 = lo_c.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min);
+        let plane = |c: [f64; 2]| {
+            let r = (TAU * (c[1] - y0) / period).exp();
+            let a = TAU * c[0] / period;
+            [r * a.cos(), r * a.sin()]
+        };
+        let up_xy: Vec<[f64; 2]> = up_c.iter().map(|&c| plane(c)).collect();
+        let lo_xy: Vec<[f64; 2]> = lo_c.iter().map(|&c| plane(c)).collect();
+        let interior: Vec<([f64; 2], DVec3, f64)> = inner
+            .iter()
+            .map(|&c| (plane(c), DVec3::ZERO, 0.0))
+            .collect();
+        match triangulate(&up_xy, &lo_xy, o.uo, o.lo, &interior, loops) {
+            Ok(t) => break (inner, y0, t),
+            Err(e) if attempt > 0 => return Err(e),
+            Err(_) => {
+                attempt += 1;
+                monotone_x(&mut up_c, period);
+                monotone_x(&mut lo_c, period);
+            }
+        }
+    };
+    // Lift: Hermite profile + harmonic correction to the real loop vertices.
+    let (nu, nl) = (loops.upper.len(), loops.lower.len());
+    let ni = band.points.len();
+    let n = nu + nl + ni;
+    let mut chart = vec![[0.0; 2]; n];
+    let mut fixed = vec![true; n];
+    let mut offset = vec![0.0; n];
+    for (k, &i) in o.uo.iter().enumerate() {
+        chart[i as usize] = up_c[k];
+        offset[i as usize] = up_r[k];
+    }
+    for (k, &i) in o.lo.iter().enumerate() {
+        chart[nu + i as usize] = lo_c[k];
+        offset[nu + i as usize] = lo_r[k];
+    }
+    for i in 0..ni {
+        match origin[i].1 {
+            Some(k) => {
+                chart[nu + nl + i] = inner[k as usize];
+                fixed[nu + nl + i] = false;
+            }
+            None => {
+                // A chord split: a free point at its plane position.
+                let xy = origin[i].0;
+                let x = xy[1].atan2(xy[0]).rem_euclid(TAU) / TAU * period;
+                let y = y0 + (xy[0].hypot(xy[1])).ln() * period / TAU;
+                chart[nu + nl + i] = [x, y];
+                fixed[nu + nl + i] = false;
+            }
+        }
+    }
+    let mut values: Vec<f64> = (0..n)
+        .map(|i| {
+            if fixed[i] {
+                offset[i] - lift.profile_offset(chart[i])
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let id = |b: BandVertex| match b {
+        BandVertex::Upper(i) => i,
+        BandVertex::Lower(i) => nu as u32 + i,
+        BandVertex::Interior(i) => (nu + nl) as u32 + i,
+    };
+    let tris: Vec<[u32; 3]> = band.triangles.iter().map(|t| t.map(id)).collect();
+    harmonic(&chart, period, &tris, &fixed, &mut values);
+    for i in 0..ni {
+        if !fixed[nu + nl + i] {
+            let c = chart[nu + nl + i];
+            band.points[i] = lift.point(c, lift.profile_offset(c) + values[nu + nl + i]);
+        }
+    }
+    Ok(band)
+}
+
+fn wrap(d: f64, period: f64) -> f64 {
+    d - period * (d / period).round()
+}
+
+/// Makes the chart `x` of a closed loop (unwrapped, running once over `period`) strictly
+/// increasing along the loop with the least change: pool-adjacent-violators isotonic regression,
+/// then a tiny spread inside each pooled block.
+fn monotone_x(c: &mut [[f64; 2]], period: f64) {
+    let n = c.len();
+    // Blocks of (sum, count).
+    let mut blocks: Vec<(f64, usize)> = Vec::with_capacity(n);
+    for p in c.iter() {
+        blocks.push((p[0], 1));
+        while blocks.len() > 1 {
+            let (s1, n1) = blocks[blocks.len() - 1];
+            let (s0, n0) = blocks[blocks.len() - 2];
+            if s0 / n0 as f64 >= s1 / n1 as f64 {
+                blocks.pop();
+                let last = blocks.len() - 1;
+                blocks[last] = (s0 + s1, n0 + n1);
+            } else {
+                break;
+            }
+        }
+    }
+    let start = c[0][0];
+    let mut k = 0;
+    for (b, &(s, m)) in blocks.iter().enumerate() {
+        let mean = s / m as f64;
+        let next = blocks
+            .get(b + 1)
+            .map(|&(s2, m2)| s2 / m2 as f64)
+            .unwrap_or(start + period);
+        let step = ((next - mean) / (m + 1) as f64).min(1e-4);
+        for j in 0..m {
+            c[k][0] = mean + step * j as f64;
+            k += 1;
+        }
+    }
+}
