@@ -25,7 +25,8 @@ import ctypes
 import json
 import os
 
-__all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "IOS", "CBCT", "version",
+__all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "merge_meshes", "is_fdi", "IOS",
+           "CBCT", "version",
            "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT"]
 
 IOS = 0
@@ -465,6 +466,49 @@ def _options(preset, frame):
         raise ValueError(f"unknown frame {frame!r}; one of {sorted(_FRAMES)}")
     o.preset, o.frame = _PRESETS[preset], _FRAMES[frame]
     return o
+
+
+def is_fdi(n):
+    """True for an FDI tooth number: 11-18 ... 41-48 (permanent), 51-55 ... 81-85 (primary)."""
+    q, u = divmod(int(n), 10)
+    return (1 <= q <= 4 and 1 <= u <= 8) or (5 <= q <= 8 and 1 <= u <= 5)
+
+
+def merge_meshes(parts):
+    """Merges labeled meshes (e.g. one CBCT tooth per object) into one jaw with per-face labels,
+    for `fuse(..., cbct_per_face=True)`. parts: (vertices, triangles, labels, per_face) with
+    flat or nested vertices/triangles; labels one per vertex (per_face False; a face takes the
+    label of its vertices, which must agree) or one per face, or a single int for the whole
+    mesh. Returns (flat vertex list, flat triangle list, per-face labels)."""
+    xyz, tris, face_labels = [], [], []
+    for k, (v, t, labels, per_face) in enumerate(parts):
+        v, t = list(_flat(v)), list(_flat(t))
+        if len(v) % 3 or len(t) % 3:
+            raise ValueError(f"mesh {k}: coordinate or index count not a multiple of 3")
+        base, nf = len(v) // 3, len(t) // 3
+        if t and (min(t) < 0 or max(t) >= base):
+            raise ValueError(f"mesh {k}: a triangle index is outside 0..{base - 1}")
+        if isinstance(labels, int):
+            fl = [labels] * nf
+        elif per_face:
+            fl = list(_flat(labels))
+            if len(fl) != nf:
+                raise ValueError(f"mesh {k}: {len(fl)} face labels for {nf} faces")
+        else:
+            vl = list(_flat(labels))
+            if len(vl) != base:
+                raise ValueError(f"mesh {k}: {len(vl)} vertex labels for {base} vertices")
+            fl = []
+            for f in range(nf):
+                a, b, c = (vl[t[3 * f + i]] for i in range(3))
+                if not a == b == c:
+                    raise ValueError(f"mesh {k}: face {f} spans labels {a}, {b}, {c}")
+                fl.append(a)
+        off = len(xyz) // 3
+        xyz.extend(v)
+        tris.extend(i + off for i in t)
+        face_labels.extend(int(x) for x in fl)
+    return xyz, tris, face_labels
 
 
 class FusedJaw:
