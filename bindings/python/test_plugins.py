@@ -153,6 +153,28 @@ class MeshLabLogicTest(unittest.TestCase):
             toothfuse_meshlab.mesh_labels(bad)
         with self.assertRaisesRegex(ValueError, "19 is not an FDI"):
             toothfuse_meshlab.mesh_part(m, fdi=19)
+        # Explicit labels (pymeshlab's PLY reader drops custom properties) win over attributes.
+        self.assertEqual(toothfuse_meshlab.mesh_part(m, labels=([0, 36.0, 36], False))[2:],
+                         ([0, 36, 36], False))
+        with self.assertRaisesRegex(ValueError, "1 CBCT label sets for 2 CBCT meshes"):
+            toothfuse_meshlab.fuse_meshes(m, [m, m], cbct_labels=[([11], True)])
+
+    def test_ply_labels(self):
+        (_, _, ip), _ = load_jaw7()
+        path = os.path.join(ts.jaw_dir(7), "ios.ply")  # binary little-endian
+        self.assertEqual(toothfuse_meshlab.ply_labels(path), (ip["label"], False))
+        ascii_ply = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"tf_labels_{os.getpid()}.ply")
+        with open(ascii_ply, "w") as f:
+            f.write("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 2\n"
+                    "property list uchar int vertex_indices\nproperty int label\n"
+                    "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2 36\n3 0 2 3 0\n")
+        try:
+            self.assertEqual(toothfuse_meshlab.ply_labels(ascii_ply), ([36, 0], True))
+            with self.assertRaisesRegex(ValueError, 'no vertex or face property "fdi"'):
+                toothfuse_meshlab.ply_labels(ascii_ply, "fdi")
+        finally:
+            os.remove(ascii_ply)
 
     def test_merge_meshes(self):
         xyz, tris, labels = toothfuse.merge_meshes([
