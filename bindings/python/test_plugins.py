@@ -1,8 +1,11 @@
 """The Blender add-on's and the MeshLab module's logic without Blender or pymeshlab: label
 handling, array conversion, world transforms, and a whole fuse of a demo jaw (ctest's
 demo_jaws fixture, jaw_7: seed 8, partial lower arch) through each plugin's code path, checked
-in pure Python (closed, consistently oriented teeth; labels; IOS crown vertices kept)."""
+in pure Python (closed, consistently oriented teeth; labels; IOS crown vertices kept). When
+Blender's `bpy` module or pymeshlab is importable (not in CI), the real add-on operator and
+the real pymeshlab path run too."""
 
+import importlib.util
 import math
 import os
 import unittest
@@ -211,6 +214,80 @@ class MeshLabLogicTest(unittest.TestCase):
             kept = {tuple(p[3 * v:3 * v + 3]) for v in set(t)
                     if jaw.sources[v] == toothfuse.SOURCE_IOS}
             self.assertEqual(kept, crowns[fdi], fdi)  # every crown vertex, bit for bit
+
+
+def _have(module):
+    return importlib.util.find_spec(module) is not None
+
+
+def _split_cbct():
+    (ixyz, itri, ip), (cxyz, ctri, cp) = load_jaw7()
+    return (ixyz, itri, ip["label"]), split_teeth(cxyz, ctri, cp["label"]), cp["label"]
+
+
+@unittest.skipUnless(_have("bpy"), "Blender's bpy module is not installed")
+class BlenderAddonTest(unittest.TestCase):
+    def test_operator(self):
+        import bpy
+        import toothfuse_blender
+
+        (ixyz, itri, ilab), teeth, clab = _split_cbct()
+        toothfuse_blender.register()
+        try:
+            for o in list(bpy.data.objects):
+                bpy.data.objects.remove(o)
+
+            def make(name, xyz, tris, labels=None):
+                me = bpy.data.meshes.new(name)
+                me.from_pydata([tuple(xyz[i:i + 3]) for i in range(0, len(xyz), 3)], [],
+                               [tuple(tris[i:i + 3]) for i in range(0, len(tris), 3)])
+                if labels is not None:
+                    me.attributes.new("label", "INT", "POINT").data.foreach_set("value",
+                                                                                labels)
+                ob = bpy.data.objects.new(name, me)
+                bpy.context.collection.objects.link(ob)
+                ob.select_set(True)
+                return ob
+
+            for fdi, (x, t) in teeth.items():
+                make(f"tooth_{fdi}", x, t)
+            ios = make("IOS", ixyz, itri, ilab)
+            ios.location, ios.rotation_euler = (5.0, -3.0, 2.0), (0.0, 0.0, 0.5)
+            bpy.context.view_layer.objects.active = ios
+            bpy.context.view_layer.update()
+            self.assertEqual(bpy.ops.object.toothfuse_fuse(frame="cbct"), {"FINISHED"})
+            me = bpy.data.objects["toothfuse_fused"].data
+            lab = [0] * len(me.vertices)
+            me.attributes["label"].data.foreach_get("value", lab)
+            tris = [v for p in me.polygons for v in p.vertices]
+            e = ts.edge_report(tris)
+            self.assertEqual((e["boundary"], e["non_manifold"], e["misoriented"]), (0, 0, 0))
+            self.assertEqual(ts.components(tris), len(set(lab)))
+            self.assertTrue(set(lab) <= (set(ilab) & set(clab)) - {0})
+            self.assertGreaterEqual(len(set(lab)), 2)
+        finally:
+            toothfuse_blender.unregister()
+
+
+@unittest.skipUnless(_have("pymeshlab"), "pymeshlab is not installed")
+class PyMeshLabTest(unittest.TestCase):
+    def test_fuse_meshset(self):
+        import pymeshlab
+
+        d = ts.jaw_dir(7)
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(os.path.join(d, "ios.ply"))
+        ms.load_new_mesh(os.path.join(d, "cbct.ply"))
+        fid = toothfuse_meshlab.fuse_meshset(
+            ms, 0, 1, frame="ios",
+            ios_labels=toothfuse_meshlab.ply_labels(os.path.join(d, "ios.ply")),
+            cbct_labels=toothfuse_meshlab.ply_labels(os.path.join(d, "cbct.ply")))
+        ms.set_current_mesh(fid)
+        topo = ms.get_topological_measures()
+        self.assertEqual((topo["boundary_edges"], topo["non_two_manifold_edges"]), (0, 0))
+        labels = set(ms.mesh(fid).vertex_custom_scalar_attribute_array("label").tolist())
+        self.assertEqual(topo["connected_components_number"], len(labels))
+        self.assertGreaterEqual(len(labels), 2)
 
 
 if __name__ == "__main__":
