@@ -352,6 +352,25 @@ TEST(VtkToothfuseFilter, LibraryErrorsCarryToothfuseMessage) {
   // One tooth is too few to register.
   m = run_expecting_error(labeled_box(kOpen, 11), labeled_box(kClosed, 11));
   EXPECT_NE(m.find("toothfuse_session_fuse failed (missing data"), std::string::npos) << m;
+  // Quads with per-cell labels are triangulated (labels follow): both jaws are accepted, and
+  // the fuse itself is what fails.
+  const std::vector<std::vector<vtkIdType>> quads = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                                     {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  vtkSmartPointer<vtkPolyData> qbox[2];
+  for (int k = 0; k < 2; k++) {  // k = 0: open (no bottom quad), 1: closed
+    qbox[k] = polydata(kBox, {});
+    vtkNew<vtkCellArray> polys;
+    vtkNew<vtkIntArray> cl;
+    cl->SetName("label");
+    for (size_t q = 1 - k; q < quads.size(); q++) {
+      polys->InsertNextCell(4, quads[q].data());
+      cl->InsertNextValue(11);
+    }
+    qbox[k]->SetPolys(polys);
+    qbox[k]->GetCellData()->AddArray(cl);
+  }
+  m = run_expecting_error(qbox[0], qbox[1]);
+  EXPECT_NE(m.find("toothfuse_session_fuse failed (missing data"), std::string::npos) << m;
   // Non-integer labels are refused before the library is called.
   auto bad = labeled_box(kOpen, 11);
   vtkNew<vtkDoubleArray> frac;
