@@ -165,7 +165,8 @@ vtkSmartPointer<vtkPolyData> fuse_demo(Demo& d, int frame) {
   }
   EXPECT_GE(d.expected.size(), 2u);
   EXPECT_EQ(std::set<int>(f->GetFusedTeeth().begin(), f->GetFusedTeeth().end()), d.expected);
-  auto* json = vtkStringArray::SafeDownCast(out->GetFieldData()->GetAbstractArray("toothfuse_report"));
+  auto* json =
+      vtkStringArray::SafeDownCast(out->GetFieldData()->GetAbstractArray("toothfuse_report"));
   EXPECT_TRUE(json && json->GetValue(0).find(frame == vtkToothfuseFilter::FRAME_IOS
                                                  ? "\"frame\": \"ios\""
                                                  : "\"frame\": \"cbct\"") != std::string::npos)

@@ -15,9 +15,10 @@ Vertices are any flat sequence of floats (list, tuple, array.array('d'/'f')); tr
 sequence of ints, 3 per triangle. array.array('f') input is passed as float32 without copying
 through Python floats; everything else as float64. numpy arrays (any shape, e.g. (n, 3)) are
 accepted when numpy is installed: float32/float64 pass without a copy, and `fuse` then returns
-numpy arrays ((n, 3) positions, (m, 3) triangles); otherwise results are array.array values. The library is found from the environment
-variable TOOTHFUSE_LIBRARY, else as libtoothfuse.so.<major> / libtoothfuse.so on the loader path.
-Errors raise ToothfuseError carrying the status and the session's detailed message.
+numpy arrays ((n, 3) positions, (m, 3) triangles); otherwise results are array.array values.
+The library is found from the environment variable TOOTHFUSE_LIBRARY, else as
+libtoothfuse.so.<major> / libtoothfuse.so on the loader path. Errors raise ToothfuseError
+carrying the status and the session's detailed message.
 """
 
 import array
@@ -221,7 +222,8 @@ def _vertex_buffer(vertices):
         if arr.size % 3:
             raise ValueError(f"{arr.size} vertex coordinates is not a multiple of 3")
         ptr = arr.ctypes.data if arr.size else None
-        return arr, ptr, arr.size // 3, 3 * arr.itemsize, _FLOAT32 if dt == np.float32 else _FLOAT64
+        scalar = _FLOAT32 if dt == np.float32 else _FLOAT64
+        return arr, ptr, arr.size // 3, 3 * arr.itemsize, scalar
     if isinstance(vertices, array.array) and vertices.typecode == "f":
         arr, scalar = vertices, _FLOAT32
     elif isinstance(vertices, array.array) and vertices.typecode == "d":

@@ -222,9 +222,10 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
     return 0;
   };
 
-  if (this->IOSRepair &&
-      (st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction)) != TOOTHFUSE_STATUS_OK)
-    return failed("toothfuse_session_set_ios_repair");
+  if (this->IOSRepair) {
+    st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction);
+    if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_ios_repair");
+  }
   for (auto* jaw : {&ios, &cbct}) {
     const bool isIos = jaw == &ios;
     st = toothfuse_session_add_jaw(
