@@ -6,21 +6,38 @@
         s.teeth(toothfuse.CBCT)                                # [46]
         positions, indices = s.mesh(toothfuse.CBCT, 46)
 
+    # One call: labeled IOS jaw + labeled CBCT teeth -> fused jaw (register, cut, stitch).
+    jaw = toothfuse.fuse(ios_vertices, ios_triangles, ios_labels,
+                         cbct_vertices, cbct_triangles, cbct_labels, frame="ios")
+    jaw.positions, jaw.triangles, jaw.labels, jaw.sources, jaw.teeth, jaw.skipped, jaw.report
+
 Vertices are any flat sequence of floats (list, tuple, array.array('d'/'f')); triangles any flat
 sequence of ints, 3 per triangle. array.array('f') input is passed as float32 without copying
-through Python floats; everything else as float64. The library is found from the environment
-variable TOOTHFUSE_LIBRARY, else as libtoothfuse.so.<major> / libtoothfuse.so on the loader path.
-Errors raise ToothfuseError carrying the status and the session's detailed message.
+through Python floats; everything else as float64. numpy arrays (any shape, e.g. (n, 3)) are
+accepted when numpy is installed: float32/float64 pass without a copy, and `fuse` then returns
+numpy arrays ((n, 3) positions, (m, 3) triangles); otherwise results are array.array values.
+The library is found from the environment variable TOOTHFUSE_LIBRARY, else as
+libtoothfuse.so.<major> / libtoothfuse.so on the loader path. Errors raise ToothfuseError
+carrying the status and the session's detailed message.
 """
 
 import array
 import ctypes
+import json
 import os
 
-__all__ = ["Session", "ToothfuseError", "IOS", "CBCT", "version", "abi_version"]
+__all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "merge_meshes", "is_fdi", "IOS",
+           "CBCT", "version",
+           "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT"]
 
 IOS = 0
 CBCT = 1
+SOURCE_IOS = 0
+SOURCE_BAND = 1
+SOURCE_CBCT = 2
+_PRESETS = {"paper": 0, "default": 1}
+_FRAMES = {"cbct": 0, "ios": 1}
+_TRANSFORMS = {"cbct_to_output": 0, "ios_to_output": 1, "cbct_to_ios": 2}
 _FLOAT32 = 0
 _FLOAT64 = 1
 _VERTEX = 0
@@ -63,6 +80,42 @@ class _MeshInfo(ctypes.Structure):
     ]
 
 
+class _Options(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_size_t), ("preset", ctypes.c_uint32),
+                ("frame", ctypes.c_uint32)]
+
+
+class _ToothReport(ctypes.Structure):
+    _fields_ = [
+        ("sd_mm", ctypes.c_double),
+        ("rmse_mm", ctypes.c_double),
+        ("inlier_fraction", ctypes.c_double),
+        ("fine_correction_mm", ctypes.c_double),
+        ("iterations", ctypes.c_size_t),
+        ("warning_count", ctypes.c_size_t),
+        ("converged", ctypes.c_bool),
+    ]
+
+
+class _FusedQuality(ctypes.Structure):
+    _fields_ = [
+        ("volume", ctypes.c_double),
+        ("band_min_angle_deg", ctypes.c_double),
+        ("band_edge_mean", ctypes.c_double),
+        ("components", ctypes.c_size_t),
+        ("boundary_edges", ctypes.c_size_t),
+        ("non_manifold_edges", ctypes.c_size_t),
+        ("non_manifold_vertices", ctypes.c_size_t),
+        ("self_intersections", ctypes.c_size_t),
+        ("degenerate_faces", ctypes.c_size_t),
+        ("band_faces", ctypes.c_size_t),
+        ("crown_vertices", ctypes.c_size_t),
+        ("closed", ctypes.c_bool),
+        ("manifold", ctypes.c_bool),
+        ("watertight", ctypes.c_bool),
+    ]
+
+
 def _fn(name, restype, *argtypes):
     f = getattr(_lib, name)
     f.restype = restype
@@ -97,6 +150,32 @@ _copy_s = _fn("toothfuse_session_copy_source_vertices", _st, _S, ctypes.c_uint32
               _u32_p, ctypes.c_size_t)
 _info = _fn("toothfuse_session_mesh_info", _st, _S, ctypes.c_uint32, ctypes.c_int32,
             ctypes.POINTER(_MeshInfo))
+_opts_default = _fn("toothfuse_options_default", _st, ctypes.POINTER(_Options))
+_register = _fn("toothfuse_session_register", _st, _S, ctypes.POINTER(_Options))
+_fuse = _fn("toothfuse_session_fuse", _st, _S, ctypes.POINTER(_Options))
+_registered = _fn("toothfuse_session_registered_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
+_fused_teeth = _fn("toothfuse_session_fused_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
+_transform = _fn("toothfuse_session_transform", _st, _S, ctypes.c_int32, ctypes.c_uint32,
+                 ctypes.POINTER(ctypes.c_double))
+_report = _fn("toothfuse_session_tooth_report", _st, _S, ctypes.c_int32,
+              ctypes.POINTER(_ToothReport))
+_warning = _fn("toothfuse_session_tooth_warning", _st, _S, ctypes.c_int32, ctypes.c_size_t,
+               ctypes.POINTER(ctypes.c_char_p))
+_skipped_count = _fn("toothfuse_session_skipped_count", _st, _S, _size_p)
+_skipped = _fn("toothfuse_session_skipped", _st, _S, ctypes.c_size_t, _i32_p,
+               ctypes.POINTER(ctypes.c_char_p))
+_report_json = _fn("toothfuse_session_report_json", _st, _S, ctypes.c_char_p, ctypes.c_size_t,
+                   _size_p)
+_fused_size = _fn("toothfuse_session_fused_size", _st, _S, ctypes.c_int32, _size_p, _size_p)
+_copy_fv = _fn("toothfuse_session_copy_fused_vertices", _st, _S, ctypes.c_int32, ctypes.c_void_p,
+               ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32)
+_copy_fi = _fn("toothfuse_session_copy_fused_indices", _st, _S, ctypes.c_int32, _u32_p,
+               ctypes.c_size_t)
+_copy_fs = _fn("toothfuse_session_copy_fused_sources", _st, _S, ctypes.c_int32,
+               ctypes.POINTER(ctypes.c_uint8), ctypes.c_size_t)
+_copy_fl = _fn("toothfuse_session_copy_fused_labels", _st, _S, _i32_p, ctypes.c_size_t)
+_quality = _fn("toothfuse_session_fused_quality", _st, _S, ctypes.c_int32,
+               ctypes.POINTER(_FusedQuality))
 
 
 def version():
@@ -122,21 +201,52 @@ class ToothfuseError(Exception):
         super().__init__(f"{self.status_name}: {message}" if message else self.status_name)
 
 
+def _numpy():
+    """The numpy module when installed, else None (numpy is optional)."""
+    try:
+        import numpy
+    except ImportError:
+        return None
+    return numpy
+
+
+def _is_ndarray(x):
+    return hasattr(x, "__array_interface__") and _numpy() is not None
+
+
 def _vertex_buffer(vertices):
+    if _is_ndarray(vertices):  # float32 stays float32 (no copy when contiguous)
+        np = _numpy()
+        dt = np.float32 if vertices.dtype == np.float32 else np.float64
+        arr = np.ascontiguousarray(vertices, dtype=dt).reshape(-1)
+        if arr.size % 3:
+            raise ValueError(f"{arr.size} vertex coordinates is not a multiple of 3")
+        ptr = arr.ctypes.data if arr.size else None
+        scalar = _FLOAT32 if dt == np.float32 else _FLOAT64
+        return arr, ptr, arr.size // 3, 3 * arr.itemsize, scalar
     if isinstance(vertices, array.array) and vertices.typecode == "f":
         arr, scalar = vertices, _FLOAT32
     elif isinstance(vertices, array.array) and vertices.typecode == "d":
         arr, scalar = vertices, _FLOAT64
     else:
-        arr, scalar = array.array("d", vertices), _FLOAT64
+        arr, scalar = array.array("d", _flat(vertices)), _FLOAT64
     if len(arr) % 3:
         raise ValueError(f"{len(arr)} vertex coordinates is not a multiple of 3")
     ptr = arr.buffer_info()[0] if len(arr) else None
     return arr, ptr, len(arr) // 3, 3 * arr.itemsize, scalar
 
 
+def _flat(values):
+    """A flat list/array of numbers from a flat or nested sequence or a numpy array."""
+    if _is_ndarray(values):
+        return values.reshape(-1).tolist()
+    if len(values) and isinstance(values[0], (list, tuple)):
+        return [v for row in values for v in row]
+    return values
+
+
 def _u32_buffer(values):
-    arr = array.array("I", values)
+    arr = array.array("I", _flat(values))
     assert arr.itemsize == 4
     return arr, ctypes.cast(arr.buffer_info()[0], _u32_p) if len(arr) else None
 
@@ -181,7 +291,7 @@ class Session:
         all or nothing. Returns the FDI numbers now held."""
         v, vp, n, stride, scalar = _vertex_buffer(vertices)
         t, tp = _u32_buffer(triangles)
-        lab = array.array("i", labels)
+        lab = array.array("i", _flat(labels))
         assert lab.itemsize == 4
         lp = ctypes.cast(lab.buffer_info()[0], _i32_p) if len(lab) else None
         self._check(_add_jaw(self._h, modality, vp, n, stride, scalar, tp, len(t), lp, len(lab),
@@ -235,3 +345,220 @@ class Session:
         i = _MeshInfo()
         self._check(_info(self._h, modality, fdi, ctypes.byref(i)))
         return {name: getattr(i, name) for name, _ in _MeshInfo._fields_}
+
+    # --- registration and fusion ---------------------------------------------------------------
+
+    def register(self, preset="default", frame="cbct"):
+        """Registers the held CBCT teeth to the held IOS crowns; returns the registered FDI
+        numbers. preset: "default" or "paper"; frame: "cbct" or "ios" (the output frame)."""
+        self._check(_register(self._h, ctypes.byref(_options(preset, frame))))
+        return self._fdi_list(_registered)
+
+    def fuse(self, preset="default", frame="cbct"):
+        """Register + cut + stitch in one call (registers anew); returns the fused FDI numbers.
+        Teeth whose fusion failed are listed by `skipped()`."""
+        self._check(_fuse(self._h, ctypes.byref(_options(preset, frame))))
+        return self._fdi_list(_fused_teeth)
+
+    def _fdi_list(self, fn):
+        out = (ctypes.c_int32 * 52)()
+        n = ctypes.c_size_t()
+        self._check(fn(self._h, out, 52, ctypes.byref(n)))
+        return list(out[: n.value])
+
+    def registered_teeth(self):
+        """FDI numbers of the registered teeth (after register or fuse)."""
+        return self._fdi_list(_registered)
+
+    def fused_teeth(self):
+        """FDI numbers of the fused teeth (after fuse)."""
+        return self._fdi_list(_fused_teeth)
+
+    def transform(self, fdi, which="cbct_to_output"):
+        """A registered tooth's 4x4 rigid transform as 16 floats, row-major; which:
+        "cbct_to_output", "ios_to_output" or "cbct_to_ios"."""
+        if which not in _TRANSFORMS:
+            raise ValueError(f"unknown transform {which!r}; one of {sorted(_TRANSFORMS)}")
+        out = (ctypes.c_double * 16)()
+        self._check(_transform(self._h, fdi, _TRANSFORMS[which], out))
+        return list(out)
+
+    def tooth_report(self, fdi):
+        """Registration report of a tooth as a dict (sd_mm, rmse_mm, inlier_fraction,
+        fine_correction_mm, iterations, converged, warnings: [str])."""
+        r = _ToothReport()
+        self._check(_report(self._h, fdi, ctypes.byref(r)))
+        d = {name: getattr(r, name) for name, _ in _ToothReport._fields_}
+        warnings = []
+        for i in range(r.warning_count):
+            w = ctypes.c_char_p()
+            self._check(_warning(self._h, fdi, i, ctypes.byref(w)))
+            warnings.append(w.value.decode())
+        del d["warning_count"]
+        d["warnings"] = warnings
+        return d
+
+    def skipped(self):
+        """Teeth of the last result that were not registered/fused: [(fdi, reason)]."""
+        n = ctypes.c_size_t()
+        self._check(_skipped_count(self._h, ctypes.byref(n)))
+        out = []
+        for i in range(n.value):
+            f, reason = ctypes.c_int32(), ctypes.c_char_p()
+            self._check(_skipped(self._h, i, ctypes.byref(f), ctypes.byref(reason)))
+            out.append((f.value, reason.value.decode()))
+        return out
+
+    def report_json(self):
+        """The report of the last result as JSON text (the CLI's report.json)."""
+        n = ctypes.c_size_t()
+        self._check(_report_json(self._h, None, 0, ctypes.byref(n)))
+        buf = ctypes.create_string_buffer(n.value + 1)
+        self._check(_report_json(self._h, buf, n.value + 1, ctypes.byref(n)))
+        return buf.value.decode()
+
+    def report(self):
+        """The report of the last result, parsed (dict)."""
+        return json.loads(self.report_json())
+
+    def fused_mesh(self, fdi=0):
+        """A fused mesh (fdi 0 = the whole jaw) as (positions array('d'), indices array('I'),
+        sources array('B'), labels array('i') for the jaw or None for one tooth)."""
+        nv, ni = ctypes.c_size_t(), ctypes.c_size_t()
+        self._check(_fused_size(self._h, fdi, ctypes.byref(nv), ctypes.byref(ni)))
+        pos = array.array("d", bytes(24 * nv.value))
+        idx = array.array("I", bytes(4 * ni.value))
+        src = array.array("B", bytes(nv.value))
+        if nv.value:
+            self._check(_copy_fv(self._h, fdi, pos.buffer_info()[0], nv.value, 24, _FLOAT64))
+            self._check(_copy_fs(self._h, fdi,
+                                 ctypes.cast(src.buffer_info()[0], ctypes.POINTER(ctypes.c_uint8)),
+                                 nv.value))
+        if ni.value:
+            self._check(_copy_fi(self._h, fdi, ctypes.cast(idx.buffer_info()[0], _u32_p),
+                                 ni.value))
+        labels = None
+        if fdi == 0:
+            labels = array.array("i", bytes(4 * nv.value))
+            assert labels.itemsize == 4
+            if nv.value:
+                self._check(_copy_fl(self._h, ctypes.cast(labels.buffer_info()[0], _i32_p),
+                                     nv.value))
+        return pos, idx, src, labels
+
+    def fused_quality(self, fdi):
+        """Quality of a fused tooth as a dict (closed, manifold, watertight, components,
+        boundary_edges, volume, self_intersections (None when not checked), ...)."""
+        q = _FusedQuality()
+        self._check(_quality(self._h, fdi, ctypes.byref(q)))
+        d = {name: getattr(q, name) for name, _ in _FusedQuality._fields_}
+        if d["self_intersections"] == ctypes.c_size_t(-1).value:
+            d["self_intersections"] = None
+        return d
+
+
+def _options(preset, frame):
+    o = _Options()
+    st = _opts_default(ctypes.byref(o))
+    if st != _OK:
+        raise ToothfuseError(st, "")
+    if preset not in _PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; one of {sorted(_PRESETS)}")
+    if frame not in _FRAMES:
+        raise ValueError(f"unknown frame {frame!r}; one of {sorted(_FRAMES)}")
+    o.preset, o.frame = _PRESETS[preset], _FRAMES[frame]
+    return o
+
+
+def is_fdi(n):
+    """True for an FDI tooth number: 11-18 ... 41-48 (permanent), 51-55 ... 81-85 (primary)."""
+    q, u = divmod(int(n), 10)
+    return (1 <= q <= 4 and 1 <= u <= 8) or (5 <= q <= 8 and 1 <= u <= 5)
+
+
+def merge_meshes(parts):
+    """Merges labeled meshes (e.g. one CBCT tooth per object) into one jaw with per-face labels,
+    for `fuse(..., cbct_per_face=True)`. parts: (vertices, triangles, labels, per_face) with
+    flat or nested vertices/triangles; labels one per vertex (per_face False; a face takes the
+    label of its vertices, which must agree) or one per face, or a single int for the whole
+    mesh. Returns (flat vertex list, flat triangle list, per-face labels)."""
+    xyz, tris, face_labels = [], [], []
+    for k, (v, t, labels, per_face) in enumerate(parts):
+        v, t = list(_flat(v)), list(_flat(t))
+        if len(v) % 3 or len(t) % 3:
+            raise ValueError(f"mesh {k}: coordinate or index count not a multiple of 3")
+        base, nf = len(v) // 3, len(t) // 3
+        if t and (min(t) < 0 or max(t) >= base):
+            raise ValueError(f"mesh {k}: a triangle index is outside 0..{base - 1}")
+        if isinstance(labels, int):
+            fl = [labels] * nf
+        elif per_face:
+            fl = list(_flat(labels))
+            if len(fl) != nf:
+                raise ValueError(f"mesh {k}: {len(fl)} face labels for {nf} faces")
+        else:
+            vl = list(_flat(labels))
+            if len(vl) != base:
+                raise ValueError(f"mesh {k}: {len(vl)} vertex labels for {base} vertices")
+            fl = []
+            for f in range(nf):
+                a, b, c = (vl[t[3 * f + i]] for i in range(3))
+                if not a == b == c:
+                    raise ValueError(f"mesh {k}: face {f} spans labels {a}, {b}, {c}")
+                fl.append(a)
+        off = len(xyz) // 3
+        xyz.extend(v)
+        tris.extend(i + off for i in t)
+        face_labels.extend(int(x) for x in fl)
+    return xyz, tris, face_labels
+
+
+class FusedJaw:
+    """Result of `fuse`: the fused jaw and what happened to each tooth.
+
+    positions: vertex x, y, z (flat array('d'), or an (n, 3) numpy array); triangles: vertex
+    indices (flat array('I'), or (m, 3) uint32); labels: per-vertex FDI (array('i') / int32);
+    sources: per-vertex SOURCE_IOS, SOURCE_BAND or SOURCE_CBCT (array('B') / uint8); teeth: the
+    fused FDI numbers; skipped: [(fdi, reason)]; quality: {fdi: dict}; transforms: {fdi:
+    {"cbct_to_output": [16], "ios_to_output": [16], "cbct_to_ios": [16]}}; report: the
+    report.json dict; frame: "cbct" or "ios"."""
+
+    def __init__(self, **fields):
+        self.__dict__.update(fields)
+
+    def __repr__(self):
+        return (f"FusedJaw(teeth={self.teeth}, skipped={[f for f, _ in self.skipped]}, "
+                f"vertices={len(self.labels)}, frame={self.frame!r})")
+
+
+def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles, cbct_labels,
+         *, ios_per_face=False, cbct_per_face=False, preset="default", frame="cbct",
+         ios_repair=False, max_hole_fraction=0.5, as_numpy=None):
+    """One call: a labeled IOS jaw (FDI per vertex, or per face with ios_per_face; 0 =
+    gingiva) and labeled CBCT teeth (one mesh with FDI labels; every tooth closed) -> FusedJaw.
+    ios_repair repairs real-scan crowns on entry. Results are numpy arrays when as_numpy is
+    True, or when it is None and numpy is installed and the IOS vertices are a numpy array.
+    Raises ToothfuseError with the library's message (naming the tooth at fault)."""
+    with Session() as s:
+        if ios_repair:
+            s.set_ios_repair(True, max_hole_fraction)
+        s.add_jaw(IOS, ios_vertices, ios_triangles, ios_labels, per_face=ios_per_face)
+        s.add_jaw(CBCT, cbct_vertices, cbct_triangles, cbct_labels, per_face=cbct_per_face)
+        teeth = s.fuse(preset=preset, frame=frame)
+        pos, idx, src, labels = s.fused_mesh(0)
+        jaw = FusedJaw(
+            positions=pos, triangles=idx, labels=labels, sources=src, teeth=teeth,
+            skipped=s.skipped(), frame=frame, report=s.report(),
+            quality={f: s.fused_quality(f) for f in teeth},
+            transforms={f: {w: s.transform(f, w) for w in _TRANSFORMS} for f in teeth})
+    if as_numpy is None:
+        as_numpy = _is_ndarray(ios_vertices)
+    if as_numpy:
+        np = _numpy()
+        if np is None:
+            raise ImportError("as_numpy=True needs numpy")
+        jaw.positions = np.frombuffer(pos, dtype=np.float64).reshape(-1, 3)
+        jaw.triangles = np.frombuffer(idx, dtype=np.uint32).reshape(-1, 3)
+        jaw.labels = np.frombuffer(labels, dtype=np.int32)
+        jaw.sources = np.frombuffer(src, dtype=np.uint8)
+    return jaw

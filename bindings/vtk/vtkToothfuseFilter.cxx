@@ -1,0 +1,336 @@
+// vtkToothfuseFilter: converts the two VTK inputs to toothfuse C API buffers, runs
+// toothfuse_session_fuse (register + cut + stitch) and converts the fused jaw back. Only the
+// public C API of toothfuse.h is used.
+#include "vtkToothfuseFilter.h"
+
+#include "toothfuse.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkStringArray.h>
+#include <vtkTriangleFilter.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+vtkStandardNewMacro(vtkToothfuseFilter);
+
+namespace {
+
+struct SessionFree {
+  void operator()(toothfuse_session* s) const { toothfuse_session_free(s); }
+};
+using SessionPtr = std::unique_ptr<toothfuse_session, SessionFree>;
+
+/// One input as C API buffers. Vertices point into `mesh` (kept alive here) or `xyz`.
+struct JawBuffers {
+  vtkSmartPointer<vtkPolyData> mesh;
+  std::vector<double> xyz;
+  const void* vertices = nullptr;
+  size_t vertexCount = 0;
+  size_t stride = 0;
+  toothfuse_scalar scalar = TOOTHFUSE_SCALAR_FLOAT64;
+  std::vector<uint32_t> indices;
+  std::vector<int32_t> labels;
+  toothfuse_label_domain domain = TOOTHFUSE_LABEL_DOMAIN_VERTEX;
+};
+
+/// True when `pd` holds only triangle polygons (no verts, lines, strips or larger polygons).
+bool OnlyTriangles(vtkPolyData* pd) {
+  if (pd->GetNumberOfVerts() || pd->GetNumberOfLines() || pd->GetNumberOfStrips()) return false;
+  vtkCellArray* polys = pd->GetPolys();
+  return polys->IsHomogeneous() == 3 || polys->GetNumberOfCells() == 0;
+}
+
+/// Fills `out` from input `pd`; on failure returns false with the reason in `err`.
+bool PrepareJaw(vtkPolyData* input, const char* arrayName, const char* what, JawBuffers& out,
+                std::string& err) {
+  std::ostringstream msg;
+  if (!input || input->GetNumberOfPoints() == 0 || input->GetNumberOfPolys() +
+                                                          input->GetNumberOfStrips() == 0) {
+    msg << what << " input has no points or no polygons";
+    err = msg.str();
+    return false;
+  }
+  if (!arrayName || !*arrayName) {
+    err = std::string(what) + " label array name is empty";
+    return false;
+  }
+  // Polygons and strips become triangles (cell data follows); verts and lines are dropped.
+  if (OnlyTriangles(input)) {
+    out.mesh = input;
+  } else {
+    vtkNew<vtkTriangleFilter> tri;
+    tri->SetInputData(input);
+    tri->PassVertsOff();
+    tri->PassLinesOff();
+    tri->Update();
+    out.mesh = tri->GetOutput();
+  }
+  vtkPolyData* pd = out.mesh;
+
+  vtkDataArray* labels = pd->GetPointData()->GetArray(arrayName);
+  out.domain = TOOTHFUSE_LABEL_DOMAIN_VERTEX;
+  if (!labels) {
+    labels = pd->GetCellData()->GetArray(arrayName);
+    out.domain = TOOTHFUSE_LABEL_DOMAIN_FACE;
+  }
+  if (!labels) {
+    msg << what << " input has no point or cell data array named \"" << arrayName
+        << "\" (the FDI tooth labels; set the name with Set" << what << "LabelArrayName)";
+    err = msg.str();
+    return false;
+  }
+  if (labels->GetNumberOfComponents() != 1) {
+    msg << what << " label array \"" << arrayName << "\" has " << labels->GetNumberOfComponents()
+        << " components, expected 1";
+    err = msg.str();
+    return false;
+  }
+  const vtkIdType nLabels = labels->GetNumberOfTuples();
+  out.labels.resize(static_cast<size_t>(nLabels));
+  for (vtkIdType i = 0; i < nLabels; i++) {
+    const double v = labels->GetComponent(i, 0);
+    if (!(v == std::floor(v)) || v < std::numeric_limits<int32_t>::min() ||
+        v > std::numeric_limits<int32_t>::max()) {
+      msg << what << " label array \"" << arrayName << "\": value " << v << " at "
+          << (out.domain == TOOTHFUSE_LABEL_DOMAIN_VERTEX ? "point " : "cell ") << i
+          << " is not an integer tooth label";
+      err = msg.str();
+      return false;
+    }
+    out.labels[static_cast<size_t>(i)] = static_cast<int32_t>(v);
+  }
+
+  // Points: float or double arrays go to the library as they are; anything else as doubles.
+  vtkDataArray* pts = pd->GetPoints()->GetData();
+  out.vertexCount = static_cast<size_t>(pd->GetNumberOfPoints());
+  if (vtkFloatArray* f = vtkArrayDownCast<vtkFloatArray>(pts)) {
+    out.vertices = f->GetPointer(0);
+    out.stride = 3 * sizeof(float);
+    out.scalar = TOOTHFUSE_SCALAR_FLOAT32;
+  } else if (vtkDoubleArray* d = vtkArrayDownCast<vtkDoubleArray>(pts)) {
+    out.vertices = d->GetPointer(0);
+    out.stride = 3 * sizeof(double);
+    out.scalar = TOOTHFUSE_SCALAR_FLOAT64;
+  } else {
+    out.xyz.resize(3 * out.vertexCount);
+    for (size_t i = 0; i < out.vertexCount; i++)
+      pd->GetPoint(static_cast<vtkIdType>(i), &out.xyz[3 * i]);
+    out.vertices = out.xyz.data();
+    out.stride = 3 * sizeof(double);
+    out.scalar = TOOTHFUSE_SCALAR_FLOAT64;
+  }
+  if (out.vertexCount > std::numeric_limits<uint32_t>::max()) {
+    msg << what << " input has " << out.vertexCount << " points, more than 2^32 - 1";
+    err = msg.str();
+    return false;
+  }
+
+  vtkCellArray* polys = pd->GetPolys();
+  out.indices.reserve(3 * static_cast<size_t>(polys->GetNumberOfCells()));
+  auto it = vtk::TakeSmartPointer(polys->NewIterator());
+  for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell()) {
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    it->GetCurrentCell(n, ids);
+    if (n != 3) {  // cannot happen after vtkTriangleFilter; kept as a guard
+      msg << what << " input: cell " << it->GetCurrentCellId() << " has " << n << " points";
+      err = msg.str();
+      return false;
+    }
+    for (vtkIdType k = 0; k < 3; k++) out.indices.push_back(static_cast<uint32_t>(ids[k]));
+  }
+  return true;
+}
+
+}  // namespace
+
+vtkToothfuseFilter::vtkToothfuseFilter() {
+  this->SetNumberOfInputPorts(2);
+  this->SetNumberOfOutputPorts(1);
+  this->SetIOSLabelArrayName("label");
+  this->SetCBCTLabelArrayName("label");
+}
+
+vtkToothfuseFilter::~vtkToothfuseFilter() {
+  this->SetIOSLabelArrayName(nullptr);
+  this->SetCBCTLabelArrayName(nullptr);
+}
+
+int vtkToothfuseFilter::FillInputPortInformation(int, vtkInformation* info) {
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  return 1;
+}
+
+std::string vtkToothfuseFilter::GetSkippedReason(int fdi) const {
+  for (size_t i = 0; i < this->SkippedTeeth.size(); i++)
+    if (this->SkippedTeeth[i] == fdi) return this->SkippedReasons[i];
+  return std::string();
+}
+
+int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                                    vtkInformationVector* outputVector) {
+  this->FusedTeeth.clear();
+  this->SkippedTeeth.clear();
+  this->SkippedReasons.clear();
+  this->ReportJSON.clear();
+  vtkPolyData* iosIn = vtkPolyData::GetData(inputVector[0], 0);
+  vtkPolyData* cbctIn = vtkPolyData::GetData(inputVector[1], 0);
+  vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
+  output->Initialize();
+
+  JawBuffers ios, cbct;
+  std::string err;
+  if (!PrepareJaw(iosIn, this->IOSLabelArrayName, "IOS", ios, err) ||
+      !PrepareJaw(cbctIn, this->CBCTLabelArrayName, "CBCT", cbct, err)) {
+    vtkErrorMacro(<< err);
+    return 0;
+  }
+
+  toothfuse_session* raw = nullptr;
+  toothfuse_status st = toothfuse_session_new(&raw);
+  SessionPtr session(raw);  // freed on every return below
+  if (st != TOOTHFUSE_STATUS_OK) {
+    vtkErrorMacro(<< "toothfuse_session_new failed: " << toothfuse_status_string(st));
+    return 0;
+  }
+  toothfuse_session* s = session.get();
+  auto failed = [&](const char* call) {
+    vtkErrorMacro(<< call << " failed (" << toothfuse_status_string(st)
+                  << "): " << toothfuse_session_last_error(s));
+    return 0;
+  };
+
+  if (this->IOSRepair) {
+    st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction);
+    if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_ios_repair");
+  }
+  for (auto* jaw : {&ios, &cbct}) {
+    const bool isIos = jaw == &ios;
+    st = toothfuse_session_add_jaw(
+        s, isIos ? TOOTHFUSE_MODALITY_IOS : TOOTHFUSE_MODALITY_CBCT, jaw->vertices,
+        jaw->vertexCount, jaw->stride, jaw->scalar, jaw->indices.data(), jaw->indices.size(),
+        jaw->labels.data(), jaw->labels.size(), jaw->domain);
+    if (st != TOOTHFUSE_STATUS_OK)
+      return failed(isIos ? "toothfuse_session_add_jaw (IOS)" : "toothfuse_session_add_jaw (CBCT)");
+  }
+
+  toothfuse_options options;
+  if ((st = toothfuse_options_default(&options)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_options_default");
+  options.preset = static_cast<toothfuse_preset>(this->Preset);
+  options.frame = static_cast<toothfuse_frame>(this->Frame);
+  if ((st = toothfuse_session_fuse(s, &options)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_fuse");
+
+  // Results: fused and skipped teeth, report JSON.
+  int32_t fdi[52];
+  size_t count = 0;
+  if ((st = toothfuse_session_fused_teeth(s, fdi, 52, &count)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_fused_teeth");
+  this->FusedTeeth.assign(fdi, fdi + count);
+  size_t skipped = 0;
+  if ((st = toothfuse_session_skipped_count(s, &skipped)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_skipped_count");
+  for (size_t i = 0; i < skipped; i++) {
+    int32_t f = 0;
+    const char* reason = nullptr;
+    if ((st = toothfuse_session_skipped(s, i, &f, &reason)) != TOOTHFUSE_STATUS_OK)
+      return failed("toothfuse_session_skipped");
+    this->SkippedTeeth.push_back(f);
+    this->SkippedReasons.emplace_back(reason ? reason : "");
+  }
+  size_t len = 0;
+  if ((st = toothfuse_session_report_json(s, nullptr, 0, &len)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_report_json");
+  std::vector<char> json(len + 1);
+  if ((st = toothfuse_session_report_json(s, json.data(), json.size(), &len)) !=
+      TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_report_json");
+  this->ReportJSON.assign(json.data(), len);
+
+  vtkNew<vtkIntArray> skippedArray;
+  skippedArray->SetName("skipped_fdi");
+  for (int f : this->SkippedTeeth) skippedArray->InsertNextValue(f);
+  vtkNew<vtkStringArray> reportArray;
+  reportArray->SetName("toothfuse_report");
+  reportArray->InsertNextValue(this->ReportJSON);
+  output->GetFieldData()->AddArray(skippedArray);
+  output->GetFieldData()->AddArray(reportArray);
+  for (size_t i = 0; i < this->SkippedTeeth.size(); i++)
+    vtkWarningMacro(<< "tooth " << this->SkippedTeeth[i]
+                    << " not fused: " << this->SkippedReasons[i]);
+  if (this->FusedTeeth.empty()) {
+    vtkWarningMacro(<< "no tooth was fused; the output is empty");
+    return 1;
+  }
+
+  // The whole fused jaw (fdi 0), copied out of the session before it is freed.
+  toothfuse_fused_view view;
+  if ((st = toothfuse_session_fused_view(s, 0, &view)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_fused_view");
+  const vtkIdType nv = static_cast<vtkIdType>(view.vertex_count);
+  const vtkIdType ni = static_cast<vtkIdType>(view.index_count);
+  vtkNew<vtkDoubleArray> xyz;
+  xyz->SetNumberOfComponents(3);
+  xyz->SetNumberOfTuples(nv);
+  std::memcpy(xyz->GetPointer(0), view.positions, 3 * view.vertex_count * sizeof(double));
+  vtkNew<vtkPoints> points;
+  points->SetData(xyz);
+  vtkNew<vtkIdTypeArray> conn;
+  conn->SetNumberOfTuples(ni);
+  for (vtkIdType i = 0; i < ni; i++) conn->SetValue(i, static_cast<vtkIdType>(view.indices[i]));
+  vtkNew<vtkCellArray> polys;
+  polys->SetData(3, conn);
+  vtkNew<vtkIntArray> label;
+  label->SetName("label");
+  label->SetNumberOfTuples(nv);
+  vtkNew<vtkUnsignedCharArray> source;
+  source->SetName("source");
+  source->SetNumberOfTuples(nv);
+  for (vtkIdType i = 0; i < nv; i++) {
+    label->SetValue(i, view.labels ? view.labels[i] : 0);
+    source->SetValue(i, view.source[i]);
+  }
+  output->SetPoints(points);
+  output->SetPolys(polys);
+  output->GetPointData()->AddArray(label);
+  output->GetPointData()->AddArray(source);
+  output->GetPointData()->SetActiveScalars("label");
+  return 1;
+}
+
+void vtkToothfuseFilter::PrintSelf(ostream& os, vtkIndent indent) {
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "IOSLabelArrayName: "
+     << (this->IOSLabelArrayName ? this->IOSLabelArrayName : "(none)") << "\n";
+  os << indent << "CBCTLabelArrayName: "
+     << (this->CBCTLabelArrayName ? this->CBCTLabelArrayName : "(none)") << "\n";
+  os << indent << "Preset: " << (this->Preset == PRESET_PAPER ? "paper" : "default") << "\n";
+  os << indent << "Frame: " << (this->Frame == FRAME_IOS ? "IOS" : "CBCT") << "\n";
+  os << indent << "IOSRepair: " << this->IOSRepair << " (MaxHoleFraction "
+     << this->MaxHoleFraction << ")\n";
+  os << indent << "FusedTeeth: " << this->FusedTeeth.size()
+     << ", SkippedTeeth: " << this->SkippedTeeth.size() << "\n";
+}
