@@ -66,6 +66,7 @@ pub fn fuse_jaw(
 ) -> Result<FusedJaw> {
     let crowns = ios_crowns(ios)?;
     let mut jaw = FusedJaw::default();
+    let mut work = Vec::new();
     for (&fdi, crown) in &crowns {
         let Some(tooth) = cbct.get(&fdi) else {
             jaw.ios_only.push(fdi);
@@ -78,13 +79,57 @@ pub fn fuse_jaw(
             ));
             continue;
         };
-        match fuse_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts) {
+        work.push((fdi, crown, tooth, t));
+    }
+    // Teeth are independent: fused on up to 4 threads, each result depends on its tooth only,
+    // so the output is the same bit for bit whatever the thread count.
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .clamp(1, 4)
+        .min(work.len().max(1));
+    let fuse_one = |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
+        (
+            fdi,
+            fuse_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts),
+        )
+    };
+    let results: Vec<(u8, Result<FusedTooth>)> = if threads <= 1 {
+        work.iter().map(fuse_one).collect()
+    } else {
+        std::thread::scope(|s| {
+            let handles: Vec<_> = (0..threads)
+                .map(|k| {
+                    let work = &work;
+                    let fuse_one = &fuse_one;
+                    s.spawn(move || {
+                        work.iter()
+                            .skip(k)
+                            .step_by(threads)
+                            .map(fuse_one)
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            let mut all = Vec::new();
+            for h in handles {
+                match h.join() {
+                    Ok(r) => all.extend(r),
+                    Err(p) => std::panic::resume_unwind(p),
+                }
+            }
+            all.sort_by_key(|r| r.0);
+            all
+        })
+    };
+    for (fdi, r) in results {
+        match r {
             Ok(f) => {
                 jaw.teeth.insert(fdi, f);
             }
             Err(e) => jaw.failed.push((fdi, e)),
         }
     }
+    jaw.failed.sort_by_key(|f| f.0);
     jaw.cbct_only = cbct
         .keys()
         .copied()
