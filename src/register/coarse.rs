@@ -3,7 +3,7 @@
 //! residual `(R(Corr(y)) − y) · n_Corr(y)` with the CBCT normal.
 
 use super::icp::{Normal7, Pair, step_about, weights};
-use super::{Correspondence, StageOptions, StageStats, ToothData};
+use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
 use std::collections::BTreeMap;
@@ -19,11 +19,11 @@ pub(crate) struct CoarseResult {
 }
 
 /// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS).
-fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, full: bool, o: &StageOptions) -> Vec<Pair> {
+fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, level: Level, o: &StageOptions) -> Vec<Pair> {
     let inv = t.inverse();
     let mut out = Vec::new();
     for d in teeth.values() {
-        for &k in d.ios_indices(full) {
+        for &k in d.ios_indices(level) {
             let y = d.ios_points[k];
             let sp = match o.correspondence {
                 Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
@@ -62,17 +62,11 @@ pub(crate) fn coarse(
         .flat_map(|d| d.ios_points.iter())
         .fold(0.0f64, |r, p| r.max((*p - center).length()));
     let mut stats = StageStats::default();
-    let mut prev_rms = f64::INFINITY;
-    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
-    for &full in phases {
-        let cap = if full && o.subsample {
-            o.full_resolution_iterations
-        } else {
-            o.convergence.max_iterations
-        };
+    for pass in passes(o) {
+        let mut prev_rms = f64::INFINITY;
         let mut converged = false;
-        for _ in 0..cap {
-            let pr = pairs(teeth, &t, full, o);
+        for _ in 0..pass.cap {
+            let pr = pairs(teeth, &t, pass.level, o);
             let w = weights(&pr, offset, &o.weights);
             let mut ne = Normal7::new();
             ne.add_pairs(&pr, &w, center, offset);
@@ -92,9 +86,9 @@ pub(crate) fn coarse(
             }
             prev_rms = rms;
         }
-        // The full-resolution pass after a subsampled one is a fixed refinement: convergence is
-        // judged on the pass that ran to its threshold.
-        if !full || !o.subsample {
+        // Convergence is judged on the pass that ran to its threshold on the subsample (the
+        // full-resolution pass after it is a fixed refinement).
+        if pass.judged {
             stats.converged = converged;
         }
     }

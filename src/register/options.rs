@@ -99,6 +99,9 @@ pub struct StageOptions {
     pub subsample: bool,
     /// Full-resolution iterations after the subsampled ones.
     pub full_resolution_iterations: usize,
+    /// With `subsample`: first iterate to convergence on the coarser warm-up sample
+    /// ([`RegisterOptions::warmup_points`] per tooth), then on the subsample.
+    pub warmup: bool,
     /// Also estimate a constant offset of the CBCT surface along its normal (threshold bias).
     pub estimate_offset: bool,
     /// Fine stages: residual along the IOS (source) normal `n_y` as in eq. (3) (`true`) or along
@@ -119,6 +122,7 @@ impl StageOptions {
             },
             subsample: false,
             full_resolution_iterations: 0,
+            warmup: false,
             estimate_offset: false,
             source_normals: true,
         }
@@ -186,6 +190,9 @@ pub struct RegisterOptions {
     pub fine: FineMode,
     /// Maximum IOS points per tooth in subsampled iterations (deterministic stride).
     pub subsample_points: usize,
+    /// Maximum IOS points per tooth in warm-up iterations (a stride sample of the subsample; see
+    /// [`StageOptions::warmup`]).
+    pub warmup_points: usize,
     /// Distance (mm) under which an IOS point counts as an inlier in the report.
     pub inlier_distance_mm: f64,
     /// Maximum IOS points per tooth over which SD, RMSE and the inlier fraction are measured
@@ -209,10 +216,14 @@ impl RegisterOptions {
             }),
             fine: FineMode::Sequential(StageOptions::paper()),
             subsample_points: usize::MAX,
+            warmup_points: usize::MAX,
             inlier_distance_mm: 0.5,
             report_points: usize::MAX,
+            // The guard only warns here (the paper has none, and its results are kept as they
+            // are): a fine step beyond the plausible drift, e.g. FR diverging on a partial arch
+            // (up to 20 mm measured), is reported as implausible.
             guard: GuardOptions {
-                max_fine_correction_mm: f64::INFINITY,
+                max_fine_correction_mm: 1.5,
                 reject_implausible: false,
                 flag_correction_mm: 0.5,
                 max_sd_mm: 0.3,
@@ -259,8 +270,8 @@ impl RegisterOptions {
         if self.report_points == 0 {
             return bad("report_points must be at least 1");
         }
-        if self.subsample_points < 3 {
-            return bad("subsample_points must be at least 3");
+        if self.subsample_points < 3 || self.warmup_points < 3 {
+            return bad("subsample_points and warmup_points must be at least 3");
         }
         let stages = [
             self.coarse.as_ref(),
@@ -318,6 +329,7 @@ impl Default for RegisterOptions {
             // iteration does not either, so none is run by default.
             subsample: true,
             full_resolution_iterations: 0,
+            warmup: false,
             estimate_offset: true,
             source_normals: false,
         };
@@ -339,6 +351,7 @@ impl Default for RegisterOptions {
                 },
             ),
             subsample_points: 800,
+            warmup_points: 200,
             inlier_distance_mm: 0.5,
             report_points: 1000,
             guard: GuardOptions {

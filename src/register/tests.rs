@@ -315,3 +315,25 @@ fn implausible_fine_step_is_reported_and_rejected() {
         r.teeth[&16].warnings
     );
 }
+
+#[test]
+fn paper_preset_reports_an_implausible_fine_step_without_rejecting_it() {
+    let mut fx = fixture(0.0, 0.0);
+    let shift = Rigid::from_translation(DVec3::new(0.0, 0.0, 2.0));
+    let c = fx.ios[&13].transformed(&shift);
+    fx.ios.insert(13, c);
+    let o = RegisterOptions::paper();
+    let r = register(&fx.ios, &fx.cbct, &o).unwrap();
+    let t = &r.teeth[&13];
+    // Faithful: the paper's FR result is kept (the tooth follows its displaced crown) ...
+    assert!(
+        t.fine_correction_mm > o.guard.max_fine_correction_mm,
+        "{t:?}"
+    );
+    // ... and flagged as implausible.
+    assert!(
+        t.warnings.iter().any(|w| w.contains("implausible")),
+        "{:?}",
+        t.warnings
+    );
+}
