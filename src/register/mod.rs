@@ -385,7 +385,10 @@ pub fn register(
     let t2 = Instant::now();
     let (coarse_t, offset, coarse_stats) = match &opts.coarse {
         Some(o) => {
-            let r = coarse::coarse(&teeth, initial, o);
+            let r = match opts.coarse_restart_fit_mm {
+                Some(bad) => coarse::coarse_with_restarts(&teeth, initial, o, bad),
+                None => coarse::coarse(&teeth, initial, o),
+            };
             (r.transform, r.offset, Some(r.stats))
         }
         None => (initial, 0.0, None),

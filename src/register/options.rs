@@ -186,6 +186,9 @@ pub struct RegisterOptions {
     pub centroid: CentroidMode,
     /// Coarse stage, eq. (2); `None` skips it.
     pub coarse: Option<StageOptions>,
+    /// Restart eq. (2) from rotated initial transforms when its median point distance exceeds
+    /// this (mm); `None` never restarts (the paper).
+    pub coarse_restart_fit_mm: Option<f64>,
     /// Fine stage.
     pub fine: FineMode,
     /// Maximum IOS points per tooth in subsampled iterations (deterministic stride).
@@ -214,6 +217,7 @@ impl RegisterOptions {
                 source_normals: false,
                 ..StageOptions::paper()
             }),
+            coarse_restart_fit_mm: None,
             fine: FineMode::Sequential(StageOptions::paper()),
             subsample_points: usize::MAX,
             warmup_points: usize::MAX,
@@ -266,6 +270,12 @@ impl RegisterOptions {
         }
         if self.inlier_distance_mm.is_nan() || self.inlier_distance_mm <= 0.0 {
             return bad("inlier_distance_mm must be > 0");
+        }
+        if self
+            .coarse_restart_fit_mm
+            .is_some_and(|x| !(x.is_finite() && x > 0.0))
+        {
+            return bad("coarse_restart_fit_mm must be finite and > 0");
         }
         if self.report_points == 0 {
             return bad("report_points must be at least 1");
@@ -347,6 +357,9 @@ impl Default for RegisterOptions {
                 warmup: true,
                 ..stage
             }),
+            // A converged jaw-wide fit has a median IOS point distance of ~0.1–0.2 mm (CBCT
+            // bias and warp); 0.5 mm means a wrong minimum (seen on a 4-tooth posterior arch).
+            coarse_restart_fit_mm: Some(0.5),
             fine: FineMode::SmoothDrift(
                 stage,
                 DriftOptions {
