@@ -7,7 +7,9 @@
 //! unoptimised). Override with `TOOTHFUSE_EVAL_CASES=n` (the README's 20-jaw table comes from
 //! `toothfuse eval --seeds 1..20`).
 
-use toothfuse::eval::{EvalTable, Row, ablation, cases, phantom_inputs, run};
+use toothfuse::eval::{
+    EvalTable, ORACLE_NO_BIAS_ROW, ORACLE_ROW, Row, ablation, cases, phantom_inputs, run,
+};
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 use toothfuse::register::{RegisterOptions, register};
 
@@ -53,11 +55,13 @@ fn ablation_accuracy_and_flags_over_synthetic_jaws() {
     }
 
     // Default configuration, per case: median and worst per-tooth TRE. The issue asked for a
-    // median <= 0.05 mm and a worst tooth <= 0.15 mm; that is unreachable here: the CBCT
-    // simulation warps every tooth by a smooth field of ~0.15 mm (and biases its threshold by up
-    // to 0.2 mm), which no rigid mapping can undo. Measured over 20 jaws (release): overall
-    // median 0.102 mm, p95 0.263, worst 0.353 mm; per-jaw medians up to 0.226 mm (partial arch,
-    // where the distortion is not averaged over the arch).
+    // median <= 0.05 mm and a worst tooth <= 0.15 mm; that is unreachable on this phantom: its
+    // CBCT warps every tooth by a smooth field of ~0.15–0.25 mm (and biases its threshold by up to
+    // 0.25 mm). Even a per-tooth crown fit with KNOWN correspondences (the oracle rows below)
+    // reaches median 0.20 mm, and 0.05 mm on 1 tooth of 219. With the warp and bias switched
+    // off the default reaches median 0.034 mm on full arches. Measured over 20 jaws (release):
+    // overall median 0.121 mm, p95 0.280, worst 0.374 mm; per-jaw medians up to 0.276 mm
+    // (partial arch, where the distortion is not averaged over the arch).
     let mut seeds: Vec<u64> = def.teeth.iter().map(|x| x.seed).collect();
     seeds.dedup();
     for s in seeds {
@@ -115,10 +119,35 @@ fn ablation_accuracy_and_flags_over_synthetic_jaws() {
     assert!(mean_tre(def) < mean_tre(cr) && mean_tre(def) < mean_tre(fr));
     assert!(def.tre_max() < cr.tre_max());
 
+    // The accuracy floor of fitting one crown at a time: per tooth, the rigid fit of the true
+    // crown points seen by the IOS to the same material points in the CBCT (bias and smooth
+    // distortion applied), correspondences known. Fitting a crown to a warped CBCT crown tilts
+    // the root even with perfect correspondences: median 0.20 mm over 20 jaws (0.21 without the
+    // bias), far above the issue's 0.05 mm. The default's joint smooth-drift fit uses the
+    // neighbours and beats that per-tooth floor: median ratio 0.60 over 20 jaws (0.61 on the
+    // first 2, 0.63 on the first 10).
+    let (orc, orc_nb) = (row(ORACLE_ROW), row(ORACLE_NO_BIAS_ROW));
+    assert_eq!(orc.teeth.len(), def.teeth.len());
+    assert!(orc.tre_median() > 0.1 && orc_nb.tre_median() > 0.1);
+    assert!(
+        def.tre_median() < 0.7 * orc.tre_median(),
+        "default median TRE {} vs per-tooth oracle {}",
+        def.tre_median(),
+        orc.tre_median()
+    );
+
     // No tooth more than 0.5 mm off without a warning (default configuration). The paper's
     // stages do leave some unflagged: CA+CR trapped in a slightly rotated minimum keeps an SD
-    // near 0.2 mm (10 and 7 of 219 teeth over 20 jaws for CA+CR and CA+CR+FR); the table's
-    // "unflagged" column shows them.
+    // near 0.2 mm (16 and 12 of 219 teeth over 20 jaws for CA+CR and CA+CR+FR, all under
+    // 0.89 mm); the table's "unflagged" column shows them.
+    // The paper's FR diverges on some jaws (up to 15–20 mm TRE): the preset keeps its result
+    // (faithful) but the plausibility guard reports every such tooth. Over 20 jaws its unflagged
+    // teeth stay under 0.71 mm (crowns fitted well to a warped CBCT crown: nothing to see).
+    let fr_bad = fr.unflagged_above(1.0);
+    assert!(
+        fr_bad.is_empty(),
+        "paper: unflagged teeth above 1 mm: {fr_bad:?}"
+    );
     let bad = def.unflagged_above(0.5);
     assert!(
         bad.is_empty(),
@@ -127,7 +156,8 @@ fn ablation_accuracy_and_flags_over_synthetic_jaws() {
 }
 
 // Limits from the final phantom (20 jaws, release): overall median 0.121 mm, p95 0.280, worst
-// 0.374 mm; per-jaw medians up to 0.276 mm (seed 3, partial arch).
+// 0.374 mm; per-jaw medians up to 0.276 mm (seed 3, partial arch). Unchanged by the coarse
+// warm-up and restarts (no tooth's TRE moved by more than 2e-6 mm).
 const MEDIAN_LIMIT: f64 = 0.30;
 const MAX_LIMIT: f64 = 0.40;
 const OVERALL_MEDIAN_LIMIT: f64 = 0.13;

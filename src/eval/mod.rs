@@ -10,6 +10,13 @@ use crate::{Error, Result};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+pub mod oracle;
+
+/// Name of the oracle row: crown fit with known correspondences (threshold bias and distortion).
+pub const ORACLE_ROW: &str = "oracle (crown, known correspondences)";
+/// Name of the oracle row without the threshold bias (distortion only).
+pub const ORACLE_NO_BIAS_ROW: &str = "oracle (crown, known correspondences, no bias)";
+
 /// The paper's Table 1(a) SD (mm) for CA, CA+CR, CA+CR+FR.
 pub const PAPER_TABLE_1A: [(&str, f64); 3] =
     [("CA", 1.1486), ("CA+CR", 0.2540), ("CA+CR+FR", 0.2318)];
@@ -167,12 +174,15 @@ pub fn score(p: &Phantom, seed: u64, variant: Variant, r: &Registration) -> Vec<
         .collect()
 }
 
-/// Runs every configuration on every case (single-threaded, deterministic).
+/// Runs every configuration on every case (single-threaded, deterministic), followed by the two
+/// oracle rows ([`ORACLE_ROW`], [`ORACLE_NO_BIAS_ROW`]; see [`oracle`]; their SD is NaN).
 pub fn run(cases: &[PhantomOptions], configs: &[(String, RegisterOptions)]) -> Result<EvalTable> {
     let mut rows: Vec<Row> = configs
         .iter()
-        .map(|(n, _)| Row {
-            name: n.clone(),
+        .map(|(n, _)| n.as_str())
+        .chain([ORACLE_ROW, ORACLE_NO_BIAS_ROW])
+        .map(|n| Row {
+            name: n.to_string(),
             teeth: Vec::new(),
             failures: Vec::new(),
         })
@@ -184,6 +194,31 @@ pub fn run(cases: &[PhantomOptions], configs: &[(String, RegisterOptions)]) -> R
             match register(&ios, &cbct, o) {
                 Ok(r) => row.teeth.extend(score(&p, c.seed, c.variant, &r)),
                 Err(e) => row.failures.push((c.seed, e.to_string())),
+            }
+        }
+        let n = configs.len();
+        match oracle::oracle(&p, c) {
+            Ok(o) => {
+                for t in o.values() {
+                    let truth = &p.truth.teeth[&t.fdi];
+                    for (k, tre) in [(n, t.tre_mm), (n + 1, t.tre_no_bias_mm)] {
+                        rows[k].teeth.push(ToothResult {
+                            seed: c.seed,
+                            variant: c.variant,
+                            jaw: p.jaw,
+                            fdi: t.fdi,
+                            tre_mm: tre,
+                            sd_mm: f64::NAN,
+                            flagged: false,
+                            metal: truth.metal_artefact,
+                        });
+                    }
+                }
+            }
+            Err(e) => {
+                for row in &mut rows[n..] {
+                    row.failures.push((c.seed, e.to_string()));
+                }
             }
         }
     }
@@ -221,15 +256,19 @@ impl EvalTable {
                         && (r.name.len() == n.len() || r.name.as_bytes()[n.len()] == b' ')
                 })
                 .map_or("–".to_string(), |(_, v)| format!("{v:.4}"));
+            let sd = match r.sd_mean() {
+                x if x.is_nan() => "–".to_string(),
+                x => format!("{x:.4}"),
+            };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {} | {} | {} |",
+                "| {} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} | {} | {} |",
                 r.name,
                 r.teeth.len(),
                 r.tre_median(),
                 r.tre_p95(),
                 r.tre_max(),
-                r.sd_mean(),
+                sd,
                 paper,
                 r.teeth.iter().filter(|t| t.flagged).count(),
                 r.unflagged_above(0.5).len(),

@@ -1,9 +1,11 @@
 //! Small geometric primitives shared by every stage: rigid transforms, points, boxes.
 
 mod rigid;
+mod triangle;
 
 pub use glam::{DMat3, DVec3};
 pub use rigid::Rigid;
+pub use triangle::closest_point_on_triangle;
 
 /// Axis-aligned bounding box of a point set; `None` when empty.
 pub fn bounding_box(points: &[DVec3]) -> Option<(DVec3, DVec3)> {

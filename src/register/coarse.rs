@@ -3,9 +3,10 @@
 //! residual `(R(Corr(y)) − y) · n_Corr(y)` with the CBCT normal.
 
 use super::icp::{Normal7, Pair, step_about, weights};
-use super::{Correspondence, StageOptions, StageStats, ToothData};
+use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
+use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 
 /// Result of the coarse stage.
@@ -19,11 +20,11 @@ pub(crate) struct CoarseResult {
 }
 
 /// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS).
-fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, full: bool, o: &StageOptions) -> Vec<Pair> {
+fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, level: Level, o: &StageOptions) -> Vec<Pair> {
     let inv = t.inverse();
     let mut out = Vec::new();
     for d in teeth.values() {
-        for &k in d.ios_indices(full) {
+        for &k in d.ios_indices(level) {
             let y = d.ios_points[k];
             let sp = match o.correspondence {
                 Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
@@ -62,17 +63,11 @@ pub(crate) fn coarse(
         .flat_map(|d| d.ios_points.iter())
         .fold(0.0f64, |r, p| r.max((*p - center).length()));
     let mut stats = StageStats::default();
-    let mut prev_rms = f64::INFINITY;
-    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
-    for &full in phases {
-        let cap = if full && o.subsample {
-            o.full_resolution_iterations
-        } else {
-            o.convergence.max_iterations
-        };
+    for pass in passes(o) {
+        let mut prev_rms = f64::INFINITY;
         let mut converged = false;
-        for _ in 0..cap {
-            let pr = pairs(teeth, &t, full, o);
+        for _ in 0..pass.cap {
+            let pr = pairs(teeth, &t, pass.level, o);
             let w = weights(&pr, offset, &o.weights);
             let mut ne = Normal7::new();
             ne.add_pairs(&pr, &w, center, offset);
@@ -92,9 +87,9 @@ pub(crate) fn coarse(
             }
             prev_rms = rms;
         }
-        // The full-resolution pass after a subsampled one is a fixed refinement: convergence is
-        // judged on the pass that ran to its threshold.
-        if !full || !o.subsample {
+        // Convergence is judged on the pass that ran to its threshold on the subsample (the
+        // full-resolution pass after it is a fixed refinement).
+        if pass.judged {
             stats.converged = converged;
         }
     }
@@ -103,4 +98,71 @@ pub(crate) fn coarse(
         offset,
         stats,
     }
+}
+
+/// Median distance (mm) from the warm-up sample of IOS points, mapped by `t⁻¹`, to the closest
+/// CBCT vertex of their tooth: how well a jaw-wide transform fits.
+fn median_fit(teeth: &BTreeMap<u8, ToothData>, t: &Rigid) -> f64 {
+    let inv = t.inverse();
+    let mut d: Vec<f64> = teeth
+        .values()
+        .flat_map(|d| {
+            d.ios_indices(Level::Warm)
+                .iter()
+                .map(|&k| d.cbct.closest_vertex(inv.apply(d.ios_points[k])).distance)
+        })
+        .collect();
+    if d.is_empty() {
+        return f64::INFINITY;
+    }
+    let m = d.len() / 2;
+    *d.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
+}
+
+/// Eq. (2) with restarts (beyond the paper): when the converged jaw-wide fit is poor (median
+/// point distance above `bad_fit_mm`, e.g. a short arch whose nearly collinear centroids leave
+/// the rotation about the arch line undetermined), the initial transform is rotated about each
+/// principal axis of the IOS tooth centroids by multiples of 30° and eq. (2) rerun from each; the
+/// best fit wins. A good first fit is returned unchanged.
+pub(crate) fn coarse_with_restarts(
+    teeth: &BTreeMap<u8, ToothData>,
+    init: Rigid,
+    o: &StageOptions,
+    bad_fit_mm: f64,
+) -> CoarseResult {
+    let first = coarse(teeth, init, o);
+    let mut best_cost = median_fit(teeth, &first.transform);
+    if best_cost <= bad_fit_mm || teeth.is_empty() {
+        return first;
+    }
+    let cs: Vec<DVec3> = teeth.values().map(|d| d.ios_centroid).collect();
+    let c = cs.iter().fold(DVec3::ZERO, |a, p| a + *p) / cs.len() as f64;
+    let mut cov = Matrix3::<f64>::zeros();
+    for p in &cs {
+        let d = *p - c;
+        for i in 0..3 {
+            for j in 0..3 {
+                cov[(i, j)] += d[i] * d[j];
+            }
+        }
+    }
+    let eig = cov.symmetric_eigen();
+    let mut best = first;
+    for a in 0..3 {
+        let v = eig.eigenvectors.column(a);
+        let axis = DVec3::new(v[0], v[1], v[2]).normalize_or_zero();
+        if axis == DVec3::ZERO {
+            continue;
+        }
+        for k in 1..12 {
+            let turn = Rigid::from_axis_angle_about(axis, (30.0 * k as f64).to_radians(), c);
+            let r = coarse(teeth, turn.compose(&init), o);
+            let cost = median_fit(teeth, &r.transform);
+            if cost < best_cost {
+                best_cost = cost;
+                best = r;
+            }
+        }
+    }
+    best
 }

@@ -12,7 +12,7 @@
 
 use super::fine::group_pairs;
 use super::icp::{Normal7, step_about, weights};
-use super::{DriftOptions, StageOptions, StageStats, ToothData};
+use super::{DriftOptions, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
 use nalgebra::{DMatrix, DVector, SMatrix};
@@ -73,17 +73,11 @@ pub(crate) fn fine_smooth(
         .iter()
         .map(|f| teeth[f].ios_radius)
         .fold(0.0, f64::max);
-    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
     let mut iterations = 0usize;
     let mut converged = false;
-    for &full in phases {
-        let cap = if full && o.subsample {
-            o.full_resolution_iterations
-        } else {
-            o.convergence.max_iterations
-        };
+    for pass in passes(o) {
         let mut phase_converged = false;
-        for _ in 0..cap {
+        for _ in 0..pass.cap {
             for (k, f) in order.iter().enumerate() {
                 ios_to_cbct.insert(*f, to_rigid(&x[k]).compose(&inv));
             }
@@ -95,7 +89,7 @@ pub(crate) fn fine_smooth(
                     teeth,
                     std::slice::from_ref(f),
                     &ios_to_cbct,
-                    full,
+                    pass.level,
                     o,
                     o.source_normals,
                 );
@@ -170,7 +164,7 @@ pub(crate) fn fine_smooth(
             }
         }
         // The full-resolution pass after a subsampled one is a fixed refinement.
-        if !full || !o.subsample {
+        if pass.judged {
             converged = phase_converged;
         }
     }

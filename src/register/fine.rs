@@ -8,7 +8,7 @@
 //! inverse; a tooth's correction `F` then gives CBCT → IOS as `T ∘ F⁻¹`.
 
 use super::icp::{Normal7, Pair, step_about, weights};
-use super::{Correspondence, StageOptions, StageStats, ToothData};
+use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
 use std::collections::BTreeMap;
@@ -20,7 +20,7 @@ pub(crate) fn group_pairs(
     teeth: &BTreeMap<u8, ToothData>,
     group: &[u8],
     ios_to_cbct: &BTreeMap<u8, Rigid>,
-    full: bool,
+    level: Level,
     o: &StageOptions,
     source_normals: bool,
 ) -> Vec<Pair> {
@@ -28,7 +28,7 @@ pub(crate) fn group_pairs(
     for fdi in group {
         let d = &teeth[fdi];
         let m = ios_to_cbct[fdi];
-        for &k in d.ios_indices(full) {
+        for &k in d.ios_indices(level) {
             let z = m.apply(d.ios_points[k]);
             let nz = m.apply_vector(d.ios_normals[k]);
             let sp = match o.correspondence {
@@ -72,20 +72,14 @@ fn register_group(
         .map(|f| ios_to_cbct[f].apply(teeth[f].ios_centroid).distance(center) + teeth[f].ios_radius)
         .fold(0.0, f64::max);
     let mut stats = StageStats::default();
-    let mut prev_rms = f64::INFINITY;
-    let phases: &[bool] = if o.subsample { &[false, true] } else { &[true] };
-    for &full in phases {
-        let cap = if full && o.subsample {
-            o.full_resolution_iterations
-        } else {
-            o.convergence.max_iterations
-        };
+    for pass in passes(o) {
+        let mut prev_rms = f64::INFINITY;
         let mut converged = false;
-        for _ in 0..cap {
+        for _ in 0..pass.cap {
             for f in group {
                 local.insert(*f, g.compose(&ios_to_cbct[f]));
             }
-            let pr = group_pairs(teeth, group, &local, full, o, o.source_normals);
+            let pr = group_pairs(teeth, group, &local, pass.level, o, o.source_normals);
             let w = weights(&pr, offset, &o.weights);
             let mut ne = Normal7::new();
             // The offset models the CBCT surface displaced along its normal: with IOS as source
@@ -107,9 +101,9 @@ fn register_group(
             }
             prev_rms = rms;
         }
-        // The full-resolution pass after a subsampled one is a fixed refinement: convergence is
-        // judged on the pass that ran to its threshold.
-        if !full || !o.subsample {
+        // Convergence is judged on the subsampled pass that ran to its threshold (the
+        // full-resolution pass after it is a fixed refinement).
+        if pass.judged {
             stats.converged = converged;
         }
     }

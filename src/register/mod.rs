@@ -55,8 +55,9 @@ pub struct ToothRegistration {
     pub cbct_to_output: Rigid,
     /// IOS → output frame.
     pub ios_to_output: Rigid,
-    /// Paper's surface distance: mean distance from the registered IOS crown points to the CBCT
-    /// surface (point-to-triangle), mm.
+    /// Paper's surface distance: mean distance from the registered IOS crown points (a stride
+    /// sample of at most [`RegisterOptions::report_points`]) to the CBCT surface
+    /// (point-to-triangle), mm.
     pub sd_mm: f64,
     /// RMS of the same distances, mm.
     pub rmse_mm: f64,
@@ -114,7 +115,8 @@ pub struct Registration {
     pub coarse: Rigid,
     /// Estimated offset of the CBCT surface along its outward normal (mm; 0 unless estimated).
     pub cbct_offset_mm: f64,
-    /// Jaw-level SD: mean over all registered IOS points of the distance to their CBCT tooth.
+    /// Jaw-level SD: mean over the measured IOS points of every tooth (at most
+    /// [`RegisterOptions::report_points`] per tooth) of the distance to their CBCT tooth.
     pub sd_mm: f64,
     /// Timing.
     pub timing: Timing,
@@ -130,16 +132,86 @@ pub(crate) struct ToothData {
     pub ios_radius: f64,
     all: Vec<usize>,
     sub: Vec<usize>,
+    warm: Vec<usize>,
+    /// IOS points over which SD, RMSE and the inlier fraction are measured.
+    report: Vec<usize>,
 }
 
 impl ToothData {
-    /// IOS point indices: all of them, or the subsample.
-    pub fn ios_indices(&self, full: bool) -> &[usize] {
-        if full { &self.all } else { &self.sub }
+    /// IOS point indices of a resolution level.
+    pub fn ios_indices(&self, level: Level) -> &[usize] {
+        match level {
+            Level::Full => &self.all,
+            Level::Sub => &self.sub,
+            Level::Warm => &self.warm,
+        }
     }
 }
 
-fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> Result<ToothData> {
+/// Resolution of the IOS points an ICP pass iterates on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Level {
+    /// At most [`RegisterOptions::warmup_points`] per tooth.
+    Warm,
+    /// At most [`RegisterOptions::subsample_points`] per tooth.
+    Sub,
+    /// Every usable point.
+    Full,
+}
+
+/// One ICP pass of a stage: its resolution, iteration cap, and whether the stage's convergence
+/// flag is judged on it (the fixed full-resolution refinement after a subsampled pass is not).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pass {
+    pub level: Level,
+    pub cap: usize,
+    pub judged: bool,
+}
+
+/// The passes of a stage: the paper iterates at full resolution; subsampled stages optionally
+/// start on the coarser warm-up sample (to convergence), then iterate on the subsample (to
+/// convergence), then run `full_resolution_iterations` at full resolution.
+pub(crate) fn passes(o: &StageOptions) -> Vec<Pass> {
+    let cap = o.convergence.max_iterations;
+    if !o.subsample {
+        return vec![Pass {
+            level: Level::Full,
+            cap,
+            judged: true,
+        }];
+    }
+    let mut v = Vec::new();
+    if o.warmup {
+        v.push(Pass {
+            level: Level::Warm,
+            cap,
+            judged: false,
+        });
+    }
+    v.push(Pass {
+        level: Level::Sub,
+        cap,
+        judged: true,
+    });
+    v.push(Pass {
+        level: Level::Full,
+        cap: o.full_resolution_iterations,
+        judged: false,
+    });
+    v
+}
+
+/// Deterministic stride sample of at most `m` of `all` (all of them when `m` is large enough).
+fn stride_sample(all: &[usize], m: usize) -> Vec<usize> {
+    if m > 0 && all.len() > m {
+        let stride = all.len().div_ceil(m);
+        all.iter().copied().step_by(stride).collect()
+    } else {
+        all.to_vec()
+    }
+}
+
+fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, opts: &RegisterOptions) -> Result<ToothData> {
     let cbct_idx = SurfaceIndex::new(cbct)
         .map_err(|e| Error::MissingData(format!("CBCT mesh: {e}")).in_tooth(fdi))?;
     if ios.triangles.is_empty() {
@@ -171,13 +243,9 @@ fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> 
             Error::MissingData("IOS crown has fewer than 3 usable vertices".into()).in_tooth(fdi),
         );
     }
-    let sub = match subsample {
-        Some(m) if m > 0 && all.len() > m => {
-            let stride = all.len().div_ceil(m);
-            all.iter().copied().step_by(stride).collect()
-        }
-        _ => all.clone(),
-    };
+    let sub = stride_sample(&all, opts.subsample_points);
+    let report = stride_sample(&all, opts.report_points);
+    let warm = stride_sample(&sub, opts.warmup_points);
     let c = crate::geom::centroid(&all.iter().map(|&k| ios.positions[k]).collect::<Vec<_>>())
         .unwrap_or(DVec3::ZERO);
     let r = all
@@ -193,6 +261,8 @@ fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, subsample: Option<usize>) -> 
         ios_radius: r,
         all,
         sub,
+        warm,
+        report,
     })
 }
 
@@ -248,7 +318,7 @@ pub fn register(
     for f in all_fdi {
         match (ios.get(&f), cbct.get(&f)) {
             (Some(i), Some(c)) => {
-                teeth.insert(f, prepare(f, i, c, Some(opts.subsample_points))?);
+                teeth.insert(f, prepare(f, i, c, opts)?);
             }
             (Some(_), None) => skipped.push(Skipped {
                 fdi: f,
@@ -315,7 +385,10 @@ pub fn register(
     let t2 = Instant::now();
     let (coarse_t, offset, coarse_stats) = match &opts.coarse {
         Some(o) => {
-            let r = coarse::coarse(&teeth, initial, o);
+            let r = match opts.coarse_restart_fit_mm {
+                Some(bad) => coarse::coarse_with_restarts(&teeth, initial, o, bad),
+                None => coarse::coarse(&teeth, initial, o),
+            };
             (r.transform, r.offset, Some(r.stats))
         }
         None => (initial, 0.0, None),
@@ -359,13 +432,13 @@ pub fn register(
         let mut fine_correction = correction(&m);
         if fine_stats.is_some() && fine_correction > opts.guard.max_fine_correction_mm {
             warnings.push(format!(
-                "fine registration moved the tooth by up to {fine_correction:.3} mm (more than the \
-                 plausible drift of {:.3} mm); {}",
+                "fine registration moved the tooth by up to {fine_correction:.3} mm, more than the \
+                 plausible drift of {:.3} mm (implausible: the fit diverged or slid); {}",
                 opts.guard.max_fine_correction_mm,
                 if opts.guard.reject_implausible {
                     "kept the coarse transform instead"
                 } else {
-                    "accepted, check this tooth"
+                    "accepted as computed, check this tooth"
                 }
             ));
             if opts.guard.reject_implausible {
@@ -380,7 +453,7 @@ pub fn register(
             ));
         }
         let dist: Vec<f64> = d
-            .all
+            .report
             .iter()
             .map(|&k| d.cbct.closest_point(m.apply(d.ios_points[k])).distance)
             .collect();

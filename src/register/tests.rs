@@ -315,3 +315,58 @@ fn implausible_fine_step_is_reported_and_rejected() {
         r.teeth[&16].warnings
     );
 }
+
+#[test]
+fn paper_preset_reports_an_implausible_fine_step_without_rejecting_it() {
+    let mut fx = fixture(0.0, 0.0);
+    let shift = Rigid::from_translation(DVec3::new(0.0, 0.0, 2.0));
+    let c = fx.ios[&13].transformed(&shift);
+    fx.ios.insert(13, c);
+    let o = RegisterOptions::paper();
+    let r = register(&fx.ios, &fx.cbct, &o).unwrap();
+    let t = &r.teeth[&13];
+    // Faithful: the paper's FR result is kept (the tooth follows its displaced crown) ...
+    assert!(
+        t.fine_correction_mm > o.guard.max_fine_correction_mm,
+        "{t:?}"
+    );
+    // ... and flagged as implausible.
+    assert!(
+        t.warnings.iter().any(|w| w.contains("implausible")),
+        "{:?}",
+        t.warnings
+    );
+}
+
+#[test]
+fn coarse_restarts_escape_a_wrong_minimum_about_the_arch_line() {
+    let fx = fixture(0.0, 0.0);
+    // A short posterior segment started 180° off about its own line: eq. (2) alone stays in a
+    // wrong minimum; the restarts find the right one.
+    let ios: BTreeMap<u8, TriMesh> = [13u8, 14, 15, 16]
+        .iter()
+        .map(|f| (*f, fx.ios[f].clone()))
+        .collect();
+    let c = |f: u8| crate::geom::centroid(&fx.ios[&f].positions).unwrap();
+    let (a, b) = (c(13), c(16));
+    let turn =
+        Rigid::from_axis_angle_about((b - a).normalize(), 180f64.to_radians(), 0.5 * (a + b));
+    let init = turn.compose(&fx.truth[&14].0);
+    let mut o = RegisterOptions {
+        initial: Some(init),
+        ..RegisterOptions::default()
+    };
+    let r = register(&ios, &fx.cbct, &o).unwrap();
+    assert!(
+        max_tre(&fx, &r) < 0.05,
+        "with restarts: {}",
+        max_tre(&fx, &r)
+    );
+    o.coarse_restart_fit_mm = None;
+    let r = register(&ios, &fx.cbct, &o).unwrap();
+    assert!(
+        max_tre(&fx, &r) > 1.0,
+        "without restarts: {}",
+        max_tre(&fx, &r)
+    );
+}
