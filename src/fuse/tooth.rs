@@ -171,9 +171,13 @@ fn fuse_inner(
     };
     let mut band_tris: Vec<[u32; 3]> = band.triangles.iter().map(|t| t.map(map)).collect();
     // Orient the band against the crown: the crown holds margin[0] → margin[1].
-    let crown_topo = EdgeTopology::new(&mesh);
     let (m0, m1) = (margin[0], margin[1 % margin.len()]);
-    debug_assert!(crown_topo.faces_of_directed(m0, m1).next().is_some());
+    debug_assert!(
+        EdgeTopology::new(&mesh)
+            .faces_of_directed(m0, m1)
+            .next()
+            .is_some()
+    );
     let band_has = |a: u32, b: u32, tris: &[[u32; 3]]| {
         tris.iter()
             .any(|t| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b))

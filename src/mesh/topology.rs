@@ -72,7 +72,11 @@ impl EdgeTopology {
 /// length, longest first (ties: by smallest vertex). Assumes a manifold mesh; at a boundary
 /// vertex shared by two loops the walk takes the first unused edge in sorted order.
 pub fn boundary_loops(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    let topo = EdgeTopology::new(mesh);
+    boundary_loops_of(&EdgeTopology::new(mesh))
+}
+
+/// [`boundary_loops`] from an already built topology.
+pub fn boundary_loops_of(topo: &EdgeTopology) -> Vec<Vec<u32>> {
     let edges = topo.boundary_half_edges();
     let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();

@@ -137,7 +137,7 @@ impl TriMesh {
         }
         let (_, components) = super::connected_components(self);
         let loops = if non_manifold_edges == 0 {
-            super::boundary_loops(self).len()
+            super::topology::boundary_loops_of(&topo).len()
         } else {
             0
         };
@@ -168,6 +168,8 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
     }
     corners.sort_unstable();
     let mut out = Vec::new();
+    let mut parent: Vec<usize> = Vec::new();
+    let mut nb: Vec<(u32, usize)> = Vec::new();
     let mut i = 0;
     while i < corners.len() {
         let v = corners[i].0;
@@ -178,7 +180,8 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
         let fan = &corners[i..j];
         // Union faces of the fan that share a neighbour vertex (= share an edge through v).
         let m = fan.len();
-        let mut parent: Vec<usize> = (0..m).collect();
+        parent.clear();
+        parent.extend(0..m);
         fn find(p: &mut [usize], mut x: usize) -> usize {
             while p[x] != x {
                 p[x] = p[p[x]];
@@ -186,7 +189,7 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
             }
             x
         }
-        let mut nb: Vec<(u32, usize)> = Vec::with_capacity(2 * m);
+        nb.clear();
         for (idx, c) in fan.iter().enumerate() {
             nb.push((c.2, idx));
             nb.push((c.3, idx));
