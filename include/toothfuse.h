@@ -436,6 +436,10 @@ typedef struct toothfuse_tooth_report {
  */
 typedef uint32_t toothfuse_label_domain;
 
+
+
+
+
 /**
  * 32-bit IEEE `float`.
  */

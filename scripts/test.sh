@@ -58,10 +58,10 @@ cargo test --release
 section "header check (include/toothfuse.h is what cbindgen $CBINDGEN_VERSION generates)"
 fresh=$(mktemp)
 trap 'rm -f "$fresh"' EXIT
-cbindgen --quiet --config cbindgen.toml --output "$fresh" src/ffi/mod.rs
+cbindgen --quiet --config cbindgen.toml --crate toothfuse --output "$fresh"
 if ! diff -u include/toothfuse.h "$fresh"; then
   echo "include/toothfuse.h is stale: regenerate with" >&2
-  echo "  cbindgen --config cbindgen.toml --output include/toothfuse.h src/ffi/mod.rs" >&2
+  echo "  cbindgen --config cbindgen.toml --crate toothfuse --output include/toothfuse.h" >&2
   exit 1
 fi
 echo "header up to date"
