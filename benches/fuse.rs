@@ -31,6 +31,12 @@ fn bench(c: &mut Criterion) {
             b.iter(|| black_box(fuse_jaw(&p.ios, &p.cbct, &transforms, &opts).expect("fuse")))
         });
     }
+    // The whole one-call fuse a host runs: register, cut and stitch every tooth.
+    let crowns = toothfuse::fuse::ios_crowns(&p.ios).expect("crowns");
+    let po = toothfuse::pipeline::PipelineOptions::default();
+    g.bench_function("register_cut_stitch_full_jaw_default", |b| {
+        b.iter(|| black_box(toothfuse::pipeline::fuse_crowns(&crowns, &p.cbct, &po).expect("fuse")))
+    });
     g.finish();
 }
 
