@@ -8,29 +8,60 @@ use super::TriMesh;
 pub struct EdgeTopology {
     /// `(from, to, face)` for every triangle side, sorted.
     pub half_edges: Vec<(u32, u32, u32)>,
+    /// `half_edges[offsets[v]..offsets[v + 1]]` are the half-edges leaving vertex `v`.
+    offsets: Vec<u32>,
 }
 
 impl EdgeTopology {
-    /// Builds the half-edge list of `mesh`.
+    /// Builds the half-edge list of `mesh` (a counting sort by `from`, then a sort of each
+    /// vertex's few half-edges).
     pub fn new(mesh: &TriMesh) -> Self {
-        let mut half_edges = Vec::with_capacity(mesh.triangles.len() * 3);
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            for k in 0..3 {
-                half_edges.push((t[k], t[(k + 1) % 3], f as u32));
+        let n = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| t.iter())
+            .map(|&v| v as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut offsets = vec![0u32; n + 1];
+        for t in &mesh.triangles {
+            for &v in t {
+                offsets[v as usize + 1] += 1;
             }
         }
-        half_edges.sort_unstable();
-        Self { half_edges }
+        for v in 0..n {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut fill = offsets.clone();
+        let mut half_edges = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let a = t[k] as usize;
+                half_edges[fill[a] as usize] = (t[k], t[(k + 1) % 3], f as u32);
+                fill[a] += 1;
+            }
+        }
+        for v in 0..n {
+            half_edges[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
+        }
+        Self {
+            half_edges,
+            offsets,
+        }
     }
 
     /// Faces holding the directed edge `a → b`.
     pub fn faces_of_directed(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
-        let start = self
-            .half_edges
-            .partition_point(|&(x, y, _)| (x, y) < (a, b));
-        self.half_edges[start..]
+        let block: &[(u32, u32, u32)] = match (
+            self.offsets.get(a as usize),
+            self.offsets.get(a as usize + 1),
+        ) {
+            (Some(&s), Some(&e)) => &self.half_edges[s as usize..e as usize],
+            _ => &[],
+        };
+        block
             .iter()
-            .take_while(move |&&(x, y, _)| x == a && y == b)
+            .filter(move |&&(_, y, _)| y == b)
             .map(|&(_, _, f)| f)
     }
 
@@ -41,19 +72,23 @@ impl EdgeTopology {
 
     /// Undirected edges with their use count, sorted by (min, max).
     pub fn undirected_edges(&self) -> Vec<(u32, u32, usize)> {
-        let mut e: Vec<(u32, u32)> = self
-            .half_edges
-            .iter()
-            .map(|&(a, b, _)| (a.min(b), a.max(b)))
-            .collect();
-        e.sort_unstable();
-        let mut out: Vec<(u32, u32, usize)> = Vec::with_capacity(e.len() / 2 + 1);
-        for (a, b) in e {
-            match out.last_mut() {
-                Some(last) if last.0 == a && last.1 == b => last.2 += 1,
-                _ => out.push((a, b, 1)),
+        let mut out: Vec<(u32, u32, usize)> = Vec::with_capacity(self.half_edges.len() / 2 + 1);
+        let h = &self.half_edges;
+        let mut i = 0;
+        while i < h.len() {
+            let (a, b, _) = h[i];
+            let mut j = i;
+            while j < h.len() && h[j].0 == a && h[j].1 == b {
+                j += 1;
             }
+            let same = j - i;
+            let rev = self.faces_of_directed(b, a).count();
+            if a < b || rev == 0 {
+                out.push((a.min(b), a.max(b), same + rev));
+            }
+            i = j;
         }
+        out.sort_unstable();
         out
     }
 
@@ -112,7 +147,11 @@ pub fn boundary_loops_of(topo: &EdgeTopology) -> Vec<Vec<u32>> {
 /// Connected components by shared edges: a component id per face, and the number of
 /// components. Ids are assigned in order of each component's lowest face index.
 pub fn connected_components(mesh: &TriMesh) -> (Vec<u32>, usize) {
-    let nf = mesh.triangles.len();
+    connected_components_of(&EdgeTopology::new(mesh), mesh.triangles.len())
+}
+
+/// [`connected_components`] from an already built topology of a mesh with `nf` faces.
+pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usize) {
     let mut parent: Vec<u32> = (0..nf as u32).collect();
     fn find(p: &mut [u32], mut x: u32) -> u32 {
         while p[x as usize] != x {
@@ -121,18 +160,13 @@ pub fn connected_components(mesh: &TriMesh) -> (Vec<u32>, usize) {
         }
         x
     }
-    // Faces sharing an undirected edge join; sort half-edges by undirected key.
-    let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(nf * 3);
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            keyed.push((a.min(b), a.max(b), f as u32));
-        }
-    }
-    keyed.sort_unstable();
-    for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 && w[0].1 == w[1].1 {
-            let (ra, rb) = (find(&mut parent, w[0].2), find(&mut parent, w[1].2));
+    // Faces sharing an edge (either direction) join; the partition does not depend on order.
+    for &(a, b, f) in &topo.half_edges {
+        for g in topo
+            .faces_of_directed(b, a)
+            .chain(topo.faces_of_directed(a, b))
+        {
+            let (ra, rb) = (find(&mut parent, f), find(&mut parent, g));
             if ra != rb {
                 let (lo, hi) = (ra.min(rb), ra.max(rb));
                 parent[hi as usize] = lo;

@@ -135,7 +135,7 @@ impl TriMesh {
                 }
             }
         }
-        let (_, components) = super::connected_components(self);
+        let (_, components) = super::topology::connected_components_of(&topo, self.triangles.len());
         let loops = if non_manifold_edges == 0 {
             super::topology::boundary_loops_of(&topo).len()
         } else {
