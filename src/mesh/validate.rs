@@ -157,16 +157,29 @@ impl TriMesh {
 /// Vertices whose incident faces form more than one edge-connected fan, sorted.
 pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
     let n = mesh.positions.len();
-    // Corners grouped by vertex: (vertex, face, the two other vertices).
-    let mut corners: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(mesh.triangles.len() * 3);
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            if (t[k] as usize) < n {
-                corners.push((t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]));
+    // Corners grouped by vertex (counting sort; faces in order within a vertex):
+    // (vertex, face, the two other vertices).
+    let mut start = vec![0usize; n + 1];
+    for t in &mesh.triangles {
+        for &v in t {
+            if (v as usize) < n {
+                start[v as usize + 1] += 1;
             }
         }
     }
-    corners.sort_unstable();
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut corners: Vec<(u32, u32, u32, u32)> = vec![(0, 0, 0, 0); start[n]];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            if v < n {
+                corners[start[v]] = (t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]);
+                start[v] += 1;
+            }
+        }
+    }
     let mut out = Vec::new();
     let mut parent: Vec<usize> = Vec::new();
     let mut nb: Vec<(u32, usize)> = Vec::new();
