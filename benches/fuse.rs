@@ -3,26 +3,12 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::collections::BTreeMap;
 use std::hint::black_box;
-use toothfuse::Rigid;
 use toothfuse::fuse::{FuseOptions, Preset, ToothTransforms, fuse_jaw};
 use toothfuse::phantom::{Phantom, PhantomOptions};
 
 fn bench(c: &mut Criterion) {
     let p = Phantom::generate(&PhantomOptions::default()).expect("phantom");
-    let transforms: BTreeMap<u8, ToothTransforms> = p
-        .truth
-        .teeth
-        .iter()
-        .map(|(&k, t)| {
-            (
-                k,
-                ToothTransforms {
-                    cbct_to_output: t.cbct_to_ios,
-                    ios_to_output: Rigid::IDENTITY,
-                },
-            )
-        })
-        .collect();
+    let transforms: BTreeMap<u8, ToothTransforms> = toothfuse::eval::true_transforms(&p);
     let mut g = c.benchmark_group("fuse");
     g.sample_size(10);
     for preset in [Preset::Default, Preset::Paper] {

@@ -4,12 +4,12 @@
 //! several seeds.
 
 use std::collections::BTreeMap;
+use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
 use toothfuse::fuse::{FuseOptions, Preset, ToothTransforms, VertexSource, fuse_jaw, ios_crowns};
 use toothfuse::mesh_check::{SurfaceDistance, self_intersections};
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 use toothfuse::stitch::PointGeneration;
-use toothfuse::{Rigid, TriMesh};
 
 /// Accuracy of one fused tooth against the truth.
 #[derive(Debug, Default, Clone, Copy)]
@@ -36,20 +36,7 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
         }
         Err(e) => panic!("phantom: {e}"),
     };
-    let transforms: BTreeMap<u8, ToothTransforms> = p
-        .truth
-        .teeth
-        .iter()
-        .map(|(&k, t)| {
-            (
-                k,
-                ToothTransforms {
-                    cbct_to_output: t.cbct_to_ios,
-                    ios_to_output: Rigid::IDENTITY,
-                },
-            )
-        })
-        .collect();
+    let transforms: BTreeMap<u8, ToothTransforms> = toothfuse::eval::true_transforms(&p);
     let mut opts = FuseOptions::preset(preset);
     opts.check_self_intersections = true;
     let fused = fuse_jaw(&p.ios, &p.cbct, &transforms, &opts).expect("fuse_jaw");
@@ -271,20 +258,7 @@ fn chart_band_beats_loft_rings() {
             return;
         }
     };
-    let transforms: BTreeMap<u8, ToothTransforms> = p
-        .truth
-        .teeth
-        .iter()
-        .map(|(&k, t)| {
-            (
-                k,
-                ToothTransforms {
-                    cbct_to_output: t.cbct_to_ios,
-                    ios_to_output: Rigid::IDENTITY,
-                },
-            )
-        })
-        .collect();
+    let transforms: BTreeMap<u8, ToothTransforms> = toothfuse::eval::true_transforms(&p);
     let measure = |points: PointGeneration| {
         let mut o = FuseOptions::preset(Preset::Default);
         o.stitch.points = points;

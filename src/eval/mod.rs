@@ -41,6 +41,24 @@ pub fn cases(first_seed: u64, n: usize) -> Vec<PhantomOptions> {
         .collect()
 }
 
+/// The phantom's true per-tooth transforms with the IOS frame as output frame (CBCT → IOS from
+/// the truth, IOS → output the identity): fusion measured without registration error.
+pub fn true_transforms(p: &Phantom) -> BTreeMap<u8, crate::fuse::ToothTransforms> {
+    p.truth
+        .teeth
+        .iter()
+        .map(|(&k, t)| {
+            (
+                k,
+                crate::fuse::ToothTransforms {
+                    cbct_to_output: t.cbct_to_ios,
+                    ios_to_output: crate::Rigid::IDENTITY,
+                },
+            )
+        })
+        .collect()
+}
+
 /// The registration inputs a host would pass for a phantom: IOS crowns split from the labeled
 /// jaw (label = FDI, 0 = gingiva dropped) and the CBCT teeth.
 pub fn phantom_inputs(p: &Phantom) -> Result<(BTreeMap<u8, TriMesh>, BTreeMap<u8, TriMesh>)> {
