@@ -12,7 +12,7 @@ pub use buffers::{Scalar, VertexBuffer};
 pub use repair::{RepairOptions, RepairReport, repair_open_surface};
 pub use split::{LabelDomain, SubMesh, split_by_face_labels, split_by_vertex_labels};
 pub use topology::{EdgeTopology, boundary_loops, connected_components};
-pub use validate::{ValidateOptions, ValidationReport};
+pub use validate::{ValidateOptions, ValidationReport, non_manifold_vertices};
 
 use glam::DVec3;
 

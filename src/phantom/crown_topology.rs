@@ -33,54 +33,6 @@ impl EdgeFaces {
     }
 }
 
-/// Vertices of `sub` whose incident faces form more than one fan.
-fn pinches(sub: &TriMesh) -> Vec<u32> {
-    let mut corners: Vec<(u32, u32, u32, u32)> = Vec::new();
-    for (f, t) in sub.triangles.iter().enumerate() {
-        for k in 0..3 {
-            corners.push((t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]));
-        }
-    }
-    corners.sort_unstable();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < corners.len() {
-        let v = corners[i].0;
-        let mut j = i;
-        while j < corners.len() && corners[j].0 == v {
-            j += 1;
-        }
-        let fan = &corners[i..j];
-        let m = fan.len();
-        let mut parent: Vec<usize> = (0..m).collect();
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
-            }
-            x
-        }
-        let mut nb: Vec<(u32, usize)> = Vec::with_capacity(2 * m);
-        for (idx, c) in fan.iter().enumerate() {
-            nb.push((c.2, idx));
-            nb.push((c.3, idx));
-        }
-        nb.sort_unstable();
-        for w in nb.windows(2) {
-            if w[0].0 == w[1].0 {
-                let (a, b) = (find(&mut parent, w[0].1), find(&mut parent, w[1].1));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-        let roots = (0..m).filter(|&x| find(&mut parent, x) == x).count();
-        if roots > 1 {
-            out.push(v);
-        }
-        i = j;
-    }
-    out
-}
-
 /// Repairs `labels` (per vertex, 0 = gingiva) so that each crown label's faces form one open
 /// disk; `allow_holes` keeps inner loops that are holes of the mesh itself. Returns the number
 /// of relabeled vertices.
@@ -147,7 +99,7 @@ pub fn make_crowns_disks(mesh: &TriMesh, labels: &mut [i32], allow_holes: bool) 
                     .collect(),
                 tris,
             );
-            let pin = pinches(&sub);
+            let pin = crate::mesh::non_manifold_vertices(&sub);
             if !pin.is_empty() {
                 for v in pin {
                     labels[globals[v as usize] as usize] = 0;
