@@ -160,17 +160,27 @@ pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usi
         }
         x
     }
+    let mut union = |f: u32, g: u32| {
+        let (ra, rb) = (find(&mut parent, f), find(&mut parent, g));
+        if ra != rb {
+            let (lo, hi) = (ra.min(rb), ra.max(rb));
+            parent[hi as usize] = lo;
+        }
+    };
     // Faces sharing an edge (either direction) join; the partition does not depend on order.
-    for &(a, b, f) in &topo.half_edges {
-        for g in topo
-            .faces_of_directed(b, a)
-            .chain(topo.faces_of_directed(a, b))
-        {
-            let (ra, rb) = (find(&mut parent, f), find(&mut parent, g));
-            if ra != rb {
-                let (lo, hi) = (ra.min(rb), ra.max(rb));
-                parent[hi as usize] = lo;
+    let he = &topo.half_edges;
+    for (i, &(a, b, f)) in he.iter().enumerate() {
+        if a < b {
+            for g in topo.faces_of_directed(b, a) {
+                union(f, g);
             }
+        }
+        // The same directed edge twice (non-manifold input): adjacent in the sorted block.
+        if let Some(&(a2, b2, g)) = he.get(i + 1)
+            && a2 == a
+            && b2 == b
+        {
+            union(f, g);
         }
     }
     let mut ids = vec![u32::MAX; nf];
