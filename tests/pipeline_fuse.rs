@@ -82,6 +82,10 @@ fn one_call_equals_register_then_fuse_jaw_bitwise() {
         for k in ["register", "cut", "stitch", "total"] {
             assert!(rep.timing_ms[k] >= 0.0, "{k}");
         }
+        // Both stages are timed and together make the fusion's wall time.
+        assert!(rep.timing_ms["cut"] > 0.0 && rep.timing_ms["stitch"] > 0.0);
+        let sum = rep.timing_ms["cut"] + rep.timing_ms["stitch"];
+        assert!((sum - rep.timing_ms["fuse"]).abs() <= 1e-9 * rep.timing_ms["fuse"].max(1.0));
         if preset == Preset::Paper {
             // The paper preset is only required to be reproduced faithfully, not accurate.
             continue;

@@ -27,6 +27,11 @@ pub struct FusedTooth {
     pub quality: ToothQuality,
     /// Warnings (filled holes, flipped input orientation, self-intersections).
     pub warnings: Vec<String>,
+    /// Time (ms) spent in crown removal (repair, frame, cut) and in stitching (band, assembly,
+    /// flips, quality report) for this tooth.
+    pub cut_ms: f64,
+    /// See [`FusedTooth::cut_ms`].
+    pub stitch_ms: f64,
 }
 
 /// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
@@ -71,6 +76,7 @@ fn fuse_inner(
     cbct_to_output: &Rigid,
     opts: &FuseOptions,
 ) -> Result<FusedTooth> {
+    let t_start = std::time::Instant::now();
     let mut warnings = Vec::new();
     // Real crowns are messy: make the crown one oriented manifold disk, filling small holes
     // (every kept vertex keeps its exact position).
@@ -139,6 +145,7 @@ fn fuse_inner(
         .into_iter()
         .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
         .collect::<Vec<_>>();
+    let cut_ms = t_start.elapsed().as_secs_f64() * 1e3;
     let band = stitch::build_band(
         &BandLoops {
             upper: &upper_pts,
@@ -230,6 +237,7 @@ fn fuse_inner(
         warnings.push(format!("{n} intersecting face pairs"));
     }
     let _ = fdi;
+    let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3 - cut_ms;
     Ok(FusedTooth {
         fdi,
         mesh,
@@ -237,6 +245,8 @@ fn fuse_inner(
         ios_vertex,
         quality: q,
         warnings,
+        cut_ms,
+        stitch_ms,
     })
 }
 

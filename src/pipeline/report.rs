@@ -74,10 +74,22 @@ impl PipelineResult {
         }
         skipped.sort_by_key(|s| s.fdi);
         let tm = &self.timing;
+        // Teeth are fused in parallel: the fuse wall time is split between cut and stitch in
+        // proportion to the teeth's summed time in each stage.
+        let (cut_sum, stitch_sum) = self
+            .jaw
+            .teeth
+            .values()
+            .fold((0.0, 0.0), |(c, s), t| (c + t.cut_ms, s + t.stitch_ms));
+        let cut_share = if cut_sum + stitch_sum > 0.0 {
+            cut_sum / (cut_sum + stitch_sum)
+        } else {
+            0.5
+        };
         let timing_ms = [
             ("register", tm.register_ms),
-            ("cut", tm.fuse_ms),
-            ("stitch", 0.0),
+            ("cut", tm.fuse_ms * cut_share),
+            ("stitch", tm.fuse_ms * (1.0 - cut_share)),
             ("fuse", tm.fuse_ms),
             ("total", tm.total_ms),
         ]
@@ -91,8 +103,8 @@ impl PipelineResult {
             sd_mm: reg.sd_mm,
             timing_ms,
             timing_note:
-                "cut includes stitching and assembly (fuse does not time them apart yet); \
-                          fuse = cut + stitch"
+                "fuse = cut + stitch (wall time); teeth are fused in parallel, so cut and \
+                          stitch split it in proportion to the teeth's summed time in each stage"
                     .into(),
         }
     }

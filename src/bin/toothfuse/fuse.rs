@@ -43,13 +43,14 @@ pub fn run(a: &FuseArgs) -> Result<()> {
         println!("skipped tooth {}: {}", s.fdi, s.reason);
     }
     println!(
-        "fused {} teeth ({} watertight, {} skipped) into {}; register {:.1} ms, cut+stitch {:.1} ms, total {:.1} ms",
+        "fused {} teeth ({} watertight, {} skipped) into {}; register {:.1} ms, cut {:.1} ms, stitch {:.1} ms, total {:.1} ms",
         rep.teeth.len(),
         watertight,
         rep.skipped.len(),
         a.out.display(),
         r.timing.register_ms,
-        r.timing.fuse_ms,
+        rep.timing_ms["cut"],
+        rep.timing_ms["stitch"],
         r.timing.total_ms
     );
     if let Some(ph) = phantom {
