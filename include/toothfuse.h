@@ -526,6 +526,20 @@ toothfuse_status toothfuse_session_fuse(struct toothfuse_session *session,
                                         const struct toothfuse_options *options);
 
 /**
+ * Cut and stitch only: removes each CBCT crown along the IOS margin and stitches crown, band and
+ * root with the session's last registration (from `toothfuse_session_register`, or an earlier
+ * fuse) instead of registering again — for hosts that register once and fuse again with other
+ * fusion options (`options`: NULL = defaults; its registration fields and frame are not used,
+ * the output frame is the registration's). WRONG_STATE without a registration (or after the
+ * teeth changed); on any failure the previous results are kept.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `options` NULL or a valid options struct.
+ */
+toothfuse_status toothfuse_session_fuse_registered(struct toothfuse_session *session,
+                                                   const struct toothfuse_options *options);
+
+/**
  * Copies the FDI numbers of the fused teeth, ascending, into `fdi_out` (room for `capacity`)
  * and writes how many to `*count_out`; BUFFER_TOO_SMALL (nothing written) when `capacity` is
  * below the count (52 always suffices). WRONG_STATE before a fuse.

@@ -424,6 +424,27 @@ impl Session {
         }))
     }
 
+    /// Cut and stitch only, with the session's last registration ([`Session::register`] or an
+    /// earlier [`Session::fuse`]) and the fusion options of `opts` (its registration options are
+    /// not used): for hosts that register once and fuse again with other options. `WrongState`
+    /// without a registration; on failure the session keeps its previous results.
+    pub fn fuse_registered(&mut self, opts: &PipelineOptions) -> Result<&Fused> {
+        let reg = self.registration()?.clone();
+        let result = pipeline::fuse_crowns_registered(
+            &self.meshes(Modality::Ios),
+            &self.meshes(Modality::Cbct),
+            &reg,
+            opts,
+        )?;
+        let report_json = serde_json::to_string_pretty(&result.report())
+            .map_err(|e| Error::InvalidArgument(format!("report serialisation failed: {e}")))?;
+        self.notes = Notes::of_fused(&result);
+        Ok(self.fused.insert(Fused {
+            result,
+            report_json,
+        }))
+    }
+
     /// The last registration (by [`Session::register`] or [`Session::fuse`]); `WrongState` if
     /// none since the teeth last changed.
     pub fn registration(&self) -> Result<&Registration> {

@@ -237,3 +237,41 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
     let (pos2, _, _) = fused(&s, 0);
     assert_eq!(pos2, pos);
 }
+
+/// Cut and stitch only (`toothfuse_session_fuse_registered`): WRONG_STATE without a
+/// registration; after `toothfuse_session_register` it fuses with that registration, and the
+/// fused meshes are exactly those of the one-call fuse with the same options.
+#[test]
+fn fuse_registered_reuses_the_registration_bit_for_bit() {
+    let p = phantom(3);
+    let s = Session::new();
+    add_phantom(&s, &p);
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse_registered(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::WrongState);
+    assert!(s.error().contains("no registration"), "{}", s.error());
+    // SAFETY: NULL session is refused, not dereferenced.
+    let st = unsafe { toothfuse_session_fuse_registered(ptr::null_mut(), ptr::null()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_register(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse_registered(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    let teeth = fused_teeth(&s);
+    assert!(teeth.len() >= 3, "{teeth:?}");
+    let two_step: Vec<_> = teeth.iter().map(|&f| fused(&s, f)).collect();
+    let t = Session::new();
+    add_phantom(&t, &p);
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse(t.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", t.error());
+    assert_eq!(fused_teeth(&t), teeth);
+    for (k, &f) in teeth.iter().enumerate() {
+        let one_call = fused(&t, f);
+        assert_eq!(one_call.0, two_step[k].0, "tooth {f}: positions");
+        assert_eq!(one_call.1, two_step[k].1, "tooth {f}: indices");
+        assert_eq!(one_call.2, two_step[k].2, "tooth {f}: sources");
+    }
+}

@@ -47,6 +47,32 @@ pub unsafe extern "C" fn toothfuse_session_fuse(
     }
 }
 
+/// Cut and stitch only: removes each CBCT crown along the IOS margin and stitches crown, band and
+/// root with the session's last registration (from `toothfuse_session_register`, or an earlier
+/// fuse) instead of registering again — for hosts that register once and fuse again with other
+/// fusion options (`options`: NULL = defaults; its registration fields and frame are not used,
+/// the output frame is the registration's). WRONG_STATE without a registration (or after the
+/// teeth changed); on any failure the previous results are kept.
+///
+/// # Safety
+/// `session` must be NULL or a live session; `options` NULL or a valid options struct.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_fuse_registered(
+    session: *mut toothfuse_session,
+    options: *const toothfuse_options,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        let body = |s: &mut Session| -> FfiResult {
+            // SAFETY: forwarded contract on `options`.
+            let opts = unsafe { read_options(options) }?;
+            s.fuse_registered(&opts)?;
+            Ok(())
+        };
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_session_mut(session, body) }
+    }
+}
+
 /// Copies the FDI numbers of the fused teeth, ascending, into `fdi_out` (room for `capacity`)
 /// and writes how many to `*count_out`; BUFFER_TOO_SMALL (nothing written) when `capacity` is
 /// below the count (52 always suffices). WRONG_STATE before a fuse.

@@ -119,6 +119,39 @@ pub fn fuse_crowns(
     opts: &PipelineOptions,
 ) -> Result<PipelineResult> {
     let t0 = Instant::now();
+    let jaw = merge_crowns(crowns)?;
+    let split = ios_crowns(&jaw)?;
+    run(t0, &jaw, &split, cbct, opts)
+}
+
+/// Cut and stitch only, with an existing registration (e.g. one made earlier by
+/// [`crate::register::register`] with the same teeth): the second half of [`fuse_crowns`], for
+/// hosts that register once and fuse with other fusion options. The result holds a copy of
+/// `registration` and `register_ms` = 0. Teeth without a registered transform are reported
+/// failed by [`fuse_jaw`].
+pub fn fuse_crowns_registered(
+    crowns: &BTreeMap<u8, TriMesh>,
+    cbct: &BTreeMap<u8, TriMesh>,
+    registration: &Registration,
+    opts: &PipelineOptions,
+) -> Result<PipelineResult> {
+    let t0 = Instant::now();
+    let jaw = merge_crowns(crowns)?;
+    let fused = fuse_jaw(&jaw, cbct, &transforms_of(registration), &opts.fuse)?;
+    let fuse_ms = ms(t0);
+    Ok(PipelineResult {
+        registration: registration.clone(),
+        jaw: fused,
+        timing: PipelineTiming {
+            register_ms: 0.0,
+            fuse_ms,
+            total_ms: ms(t0),
+        },
+    })
+}
+
+/// Per-tooth crowns merged into one mesh with per-vertex FDI labels.
+fn merge_crowns(crowns: &BTreeMap<u8, TriMesh>) -> Result<LabeledMesh> {
     let mut jaw = LabeledMesh::default();
     let mut labels = Vec::new();
     for (&fdi, m) in crowns {
@@ -127,8 +160,7 @@ pub fn fuse_crowns(
         labels.extend(std::iter::repeat_n(fdi as i32, m.positions.len()));
     }
     jaw.vertex_labels = Some(labels);
-    let split = ios_crowns(&jaw)?;
-    run(t0, &jaw, &split, cbct, opts)
+    Ok(jaw)
 }
 
 fn run(
