@@ -5,8 +5,8 @@
 
 use super::boundary::{Failure, FfiResult, check_out, ffi_panic_boundary, slice_out, write_out};
 use super::mesh::{toothfuse_scalar, write_vertices};
-use super::register::{copy_fdis, read_options, toothfuse_options};
-use super::session::{toothfuse_session, with_session, with_session_mut};
+use super::register::{copy_fdis, toothfuse_options, with_options};
+use super::session::{toothfuse_session, with_session};
 use super::status::toothfuse_status;
 use crate::arch::check_fdi;
 use crate::session::Session;
@@ -36,14 +36,13 @@ pub unsafe extern "C" fn toothfuse_session_fuse(
     options: *const toothfuse_options,
 ) -> toothfuse_status {
     ffi_panic_boundary! {
-        let body = |s: &mut Session| -> FfiResult {
-            // SAFETY: forwarded contract on `options`.
-            let opts = unsafe { read_options(options) }?;
-            s.fuse(&opts)?;
-            Ok(())
-        };
-        // SAFETY: forwarded contract on `session`.
-        unsafe { with_session_mut(session, body) }
+        // SAFETY: forwarded contracts on `session` and `options`.
+        unsafe {
+            with_options(session, options, |s, o| {
+                s.fuse(o)?;
+                Ok(())
+            })
+        }
     }
 }
 
@@ -62,14 +61,13 @@ pub unsafe extern "C" fn toothfuse_session_fuse_registered(
     options: *const toothfuse_options,
 ) -> toothfuse_status {
     ffi_panic_boundary! {
-        let body = |s: &mut Session| -> FfiResult {
-            // SAFETY: forwarded contract on `options`.
-            let opts = unsafe { read_options(options) }?;
-            s.fuse_registered(&opts)?;
-            Ok(())
-        };
-        // SAFETY: forwarded contract on `session`.
-        unsafe { with_session_mut(session, body) }
+        // SAFETY: forwarded contracts on `session` and `options`.
+        unsafe {
+            with_options(session, options, |s, o| {
+                s.fuse_registered(o)?;
+                Ok(())
+            })
+        }
     }
 }
 

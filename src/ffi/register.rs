@@ -142,15 +142,33 @@ pub unsafe extern "C" fn toothfuse_session_register(
     options: *const toothfuse_options,
 ) -> toothfuse_status {
     ffi_panic_boundary! {
-        let body = |s: &mut Session| -> FfiResult {
-            // SAFETY: forwarded contract on `options`.
-            let opts = unsafe { read_options(options) }?;
-            s.register(&opts)?;
-            Ok(())
-        };
-        // SAFETY: forwarded contract on `session`.
-        unsafe { with_session_mut(session, body) }
+        // SAFETY: forwarded contracts on `session` and `options`.
+        unsafe {
+            with_options(session, options, |s, o| {
+                s.register(o)?;
+                Ok(())
+            })
+        }
     }
+}
+
+/// The shared body of the entry points that take an options struct: reads `options` (NULL =
+/// defaults) and runs `run` on the session.
+///
+/// # Safety
+/// `session` must be NULL or a live session; `options` NULL or a valid options struct.
+pub(crate) unsafe fn with_options(
+    session: *mut toothfuse_session,
+    options: *const toothfuse_options,
+    run: impl FnOnce(&mut Session, &PipelineOptions) -> FfiResult,
+) -> toothfuse_status {
+    let body = |s: &mut Session| -> FfiResult {
+        // SAFETY: forwarded contract on `options`.
+        let opts = unsafe { read_options(options) }?;
+        run(s, &opts)
+    };
+    // SAFETY: forwarded contract on `session`.
+    unsafe { with_session_mut(session, body) }
 }
 
 /// The registration of tooth `fdi`, or WRONG_STATE / MISSING_DATA naming what is missing.
