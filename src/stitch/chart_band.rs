@@ -1,7 +1,8 @@
 //! Glue of the default band ([`super::PointGeneration::Chart`]): loops into the chart, graded
 //! sample, constrained Delaunay triangulation in the annulus plane, harmonic lift to 3D.
 
-use super::chart::{Lift, RefCurve, SampleOptions, convex_reference, harmonic, sample};
+use super::chart::{Lift, RefCurve, convex_reference, harmonic};
+use super::chart_sample::{SampleOptions, sample};
 use super::{
     Band, BandLoops, BandVertex, StitchOptions, mean_edge, smooth, smooth_dirs, triangulate,
 };

@@ -11,6 +11,7 @@
 
 pub mod chart;
 mod chart_band;
+pub mod chart_sample;
 pub mod interp;
 pub mod param;
 

@@ -1,0 +1,292 @@
+//! Graded, deterministic Poisson-disk sampling of the band region in the chart (see
+//! [`super::chart`]): spacing from the margin's edge length at the top to the cut's at the
+//! bottom, points kept clear of loop vertices and edges so no sliver forms against a loop.
+
+use super::chart::wrap;
+
+/// Options of the chart sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleOptions {
+    /// Edge length at the margin (mm).
+    pub e_upper: f64,
+    /// Edge length at the cut (mm).
+    pub e_lower: f64,
+    /// Poisson-disk radius as a fraction of the local edge length.
+    pub radius: f64,
+    /// Smallest distance from a loop edge as a fraction of the local edge length.
+    pub clearance: f64,
+}
+
+/// Uniform grid over the periodic strip `[0, period) × [y0, y1]`.
+struct Grid {
+    period: f64,
+    cw: f64,
+    nx: usize,
+    y0: f64,
+    ch: f64,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl Grid {
+    fn new(period: f64, y0: f64, y1: f64, cell: f64) -> Grid {
+        let nx = ((period / cell).floor() as usize).max(1);
+        let ny = (((y1 - y0) / cell).ceil() as usize).max(1) + 2;
+        Grid {
+            period,
+            cw: period / nx as f64,
+            nx,
+            y0: y0 - cell,
+            ch: cell,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        }
+    }
+
+    fn cell_of(&self, p: [f64; 2]) -> (i64, i64) {
+        (
+            (p[0].rem_euclid(self.period) / self.cw).floor() as i64,
+            ((p[1] - self.y0) / self.ch).floor() as i64,
+        )
+    }
+
+    fn index(&self, cx: i64, cy: i64) -> Option<usize> {
+        if cy < 0 || cy >= self.ny as i64 {
+            return None;
+        }
+        Some(cy as usize * self.nx + cx.rem_euclid(self.nx as i64) as usize)
+    }
+
+    /// Inserts `id` into every cell overlapping the box of `a`–`b` (`b` unwrapped near `a`).
+    fn insert_box(&mut self, id: u32, a: [f64; 2], b: [f64; 2]) {
+        let fx = |x: f64| (x / self.cw).floor() as i64;
+        let fy = |y: f64| ((y - self.y0) / self.ch).floor() as i64;
+        let (x0, x1) = (fx(a[0].min(b[0])), fx(a[0].max(b[0])));
+        let (y0, y1) = (fy(a[1].min(b[1])), fy(a[1].max(b[1])));
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                if let Some(i) = self.index(cx, cy)
+                    && self.cells[i].last() != Some(&id)
+                {
+                    self.cells[i].push(id);
+                }
+            }
+        }
+    }
+
+    /// Ids in the 3×3 cells around `p` (may repeat).
+    fn near(&self, p: [f64; 2], mut f: impl FnMut(u32) -> bool) -> bool {
+        let (cx, cy) = self.cell_of(p);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(i) = self.index(cx + dx, cy + dy) {
+                    for &id in &self.cells[i] {
+                        if !f(id) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Squared distance from `p` to segment `a`–`b` in the periodic strip.
+fn seg_dist2(p: [f64; 2], a: [f64; 2], b: [f64; 2], period: f64) -> f64 {
+    let ax = p[0] + wrap(a[0] - p[0], period);
+    let bx = ax + wrap(b[0] - a[0], period);
+    let (ex, ey) = (bx - ax, b[1] - a[1]);
+    let l2 = ex * ex + ey * ey;
+    let t = if l2 > 0.0 {
+        (((p[0] - ax) * ex + (p[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (dx, dy) = (ax + t * ex - p[0], a[1] + t * ey - p[1]);
+    dx * dx + dy * dy
+}
+
+/// Graded Poisson-disk sample of the region between the upper polyline `up` and the lower
+/// polyline `lo` (chart coordinates, both closed and running once around the periodic strip).
+/// Returned points have `x` in `[0, period)`.
+pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) -> Vec<[f64; 2]> {
+    let e_min = o.e_upper.min(o.e_lower);
+    let e_max = o.e_upper.max(o.e_lower);
+    let step = 0.25 * e_min;
+    let ncols = ((period / (step * 0.866)).ceil() as usize).max(3);
+    let cx = period / ncols as f64;
+    // Crossings of every column x_k = (k + ½)·cx with both loops: (y, is_upper).
+    let mut cross: Vec<Vec<(f64, bool)>> = vec![Vec::new(); ncols];
+    for (is_up, lp) in [(true, up), (false, lo)] {
+        let n = lp.len();
+        for i in 0..n {
+            let a = lp[i];
+            let b = lp[(i + 1) % n];
+            let dx = wrap(b[0] - a[0], period);
+            if dx == 0.0 {
+                continue;
+            }
+            let (x0, x1) = (a[0].min(a[0] + dx), a[0].max(a[0] + dx));
+            let k0 = (x0 / cx - 0.5).ceil() as i64;
+            let k1 = (x1 / cx - 0.5).ceil() as i64;
+            for k in k0..k1 {
+                let xk = (k as f64 + 0.5) * cx;
+                let y = a[1] + (xk - a[0]) / dx * (b[1] - a[1]);
+                cross[k.rem_euclid(ncols as i64) as usize].push((y, is_up));
+            }
+        }
+    }
+    // Candidates: a column-aligned hexagonal lattice inside the region, each with its size.
+    let mut cand: Vec<(f64, [f64; 2], f64)> = Vec::new(); // (priority, point, size)
+    let mut y_lo = f64::INFINITY;
+    let mut y_hi = f64::NEG_INFINITY;
+    for (k, c) in cross.iter_mut().enumerate() {
+        c.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let xk = (k as f64 + 0.5) * cx;
+        let shift = if k % 2 == 1 { 0.5 } else { 0.0 };
+        let (mut pu, mut pl) = (false, false);
+        for w in 0..c.len() {
+            if c[w].1 {
+                pu = !pu;
+            } else {
+                pl = !pl;
+            }
+            if !pu || pl || w + 1 >= c.len() {
+                continue;
+            }
+            let (top, bottom) = (c[w], c[w + 1]);
+            let h = top.0 - bottom.0;
+            if h <= 0.0 {
+                continue;
+            }
+            y_lo = y_lo.min(bottom.0);
+            y_hi = y_hi.max(top.0);
+            let j0 = (bottom.0 / step - shift).floor() as i64 + 1;
+            let j1 = (top.0 / step - shift).ceil() as i64 - 1;
+            for j in j0..=j1 {
+                let y = (j as f64 + shift) * step;
+                if y <= bottom.0 || y >= top.0 {
+                    continue;
+                }
+                let t = (y - bottom.0) / h;
+                let size = match (top.1, bottom.1) {
+                    (true, false) => o.e_lower + (o.e_upper - o.e_lower) * t,
+                    (true, true) => o.e_upper,
+                    (false, false) => o.e_lower,
+                    (false, true) => 0.5 * (o.e_upper + o.e_lower),
+                };
+                cand.push((1.0 - t, [xk, y], size));
+            }
+        }
+    }
+    if cand.is_empty() {
+        return Vec::new();
+    }
+    cand.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then(a.1[0].total_cmp(&b.1[0]))
+            .then(a.1[1].total_cmp(&b.1[1]))
+    });
+    // Greedy acceptance against loop vertices, loop edges and accepted points.
+    let cell = o.radius.max(o.clearance) * e_max;
+    for lp in [up, lo] {
+        for p in lp {
+            y_lo = y_lo.min(p[1]);
+            y_hi = y_hi.max(p[1]);
+        }
+    }
+    let mut pts: Vec<([f64; 2], f64)> = Vec::new();
+    let mut pgrid = Grid::new(period, y_lo, y_hi, cell);
+    let mut sgrid = Grid::new(period, y_lo, y_hi, cell);
+    let mut segs: Vec<([f64; 2], [f64; 2])> = Vec::new();
+    for (lp, e) in [(up, o.e_upper), (lo, o.e_lower)] {
+        let n = lp.len();
+        for i in 0..n {
+            let a = lp[i];
+            let b = lp[(i + 1) % n];
+            let id = pts.len() as u32;
+            pgrid.insert_box(id, a, a);
+            pts.push(([a[0].rem_euclid(period), a[1]], e));
+            let sid = segs.len() as u32;
+            let bu = [a[0] + wrap(b[0] - a[0], period), b[1]];
+            sgrid.insert_box(sid, a, bu);
+            segs.push((a, b));
+        }
+    }
+    let n_fixed = pts.len();
+    for &(_, p, e) in &cand {
+        let ok_pts = pgrid.near(p, |id| {
+            let (q, eq) = pts[id as usize];
+            let r = o.radius * 0.5 * (e + eq);
+            let dx = wrap(p[0] - q[0], period);
+            let dy = p[1] - q[1];
+            dx * dx + dy * dy >= r * r
+        });
+        if !ok_pts {
+            continue;
+        }
+        let c2 = (o.clearance * e).powi(2);
+        let ok_segs = sgrid.near(p, |id| {
+            let (a, b) = segs[id as usize];
+            seg_dist2(p, a, b, period) >= c2
+        });
+        if !ok_segs {
+            continue;
+        }
+        let id = pts.len() as u32;
+        pgrid.insert_box(id, p, p);
+        pts.push((p, e));
+    }
+    pts[n_fixed..].iter().map(|&(p, _)| p).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_is_inside_spaced_and_clear_of_loops() {
+        let period = 20.0;
+        let up: Vec<[f64; 2]> = (0..200)
+            .map(|i| {
+                let x = period * i as f64 / 200.0;
+                [x, 1.0 + 0.2 * (x * 3.0).sin()]
+            })
+            .collect();
+        let lo: Vec<[f64; 2]> = (0..70)
+            .map(|i| [period * i as f64 / 70.0, -0.3 * (x_of(i) * 0.5).cos()])
+            .collect();
+        fn x_of(i: usize) -> f64 {
+            20.0 * i as f64 / 70.0
+        }
+        let o = SampleOptions {
+            e_upper: 0.1,
+            e_lower: 0.3,
+            radius: 0.8,
+            clearance: 0.5,
+        };
+        let s = sample(&up, &lo, period, &o);
+        assert!(s.len() > 500, "{} points", s.len());
+        for p in &s {
+            let k = ((p[0] / period * 200.0).floor() as usize).min(199);
+            let top = up[k][1].max(up[(k + 1) % 200][1]);
+            let kl = ((p[0] / period * 70.0).floor() as usize).min(69);
+            let bottom = lo[kl][1].min(lo[(kl + 1) % 70][1]);
+            assert!(p[1] < top && p[1] > bottom, "{p:?} outside");
+            for q in up.iter().chain(&lo) {
+                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                assert!(
+                    d >= 0.8 * 0.5 * (0.1 + 0.1) - 1e-12,
+                    "{p:?} too close to {q:?}"
+                );
+            }
+        }
+        for (i, p) in s.iter().enumerate() {
+            for q in &s[i + 1..] {
+                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                assert!(d >= 0.8 * 0.1 - 1e-12);
+            }
+        }
+    }
+}
