@@ -414,14 +414,7 @@ impl Session {
             &self.meshes(Modality::Cbct),
             opts,
         )?;
-        let report_json = serde_json::to_string_pretty(&result.report())
-            .map_err(|e| Error::InvalidArgument(format!("report serialisation failed: {e}")))?;
-        self.registration = Some(result.registration.clone());
-        self.notes = Notes::of_fused(&result);
-        Ok(self.fused.insert(Fused {
-            result,
-            report_json,
-        }))
+        self.keep_fused(result, true)
     }
 
     /// Cut and stitch only, with the session's last registration ([`Session::register`] or an
@@ -436,8 +429,17 @@ impl Session {
             &reg,
             opts,
         )?;
+        self.keep_fused(result, false)
+    }
+
+    /// Keeps a fusion result (with its report JSON and notes), and its registration when
+    /// `new_registration`; nothing changes if the report cannot be serialised.
+    fn keep_fused(&mut self, result: PipelineResult, new_registration: bool) -> Result<&Fused> {
         let report_json = serde_json::to_string_pretty(&result.report())
             .map_err(|e| Error::InvalidArgument(format!("report serialisation failed: {e}")))?;
+        if new_registration {
+            self.registration = Some(result.registration.clone());
+        }
         self.notes = Notes::of_fused(&result);
         Ok(self.fused.insert(Fused {
             result,

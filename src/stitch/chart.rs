@@ -170,9 +170,9 @@ pub fn convex_reference(
         }
         hull.pop();
     }
-    // Resample uniformly.
+    // Resample uniformly, in the frame's plane (z = 0).
     let n = hull.len();
-    let mut out: Vec<[f64; 2]> = Vec::new();
+    let mut out: Vec<DVec3> = Vec::new();
     if n < 3 {
         return Vec::new();
     }
@@ -182,23 +182,17 @@ pub fn convex_reference(
         let k = ((len / spacing).ceil() as usize).max(1);
         for j in 0..k {
             let t = j as f64 / k as f64;
-            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+            out.push(DVec3::new(
+                a[0] + t * (b[0] - a[0]),
+                a[1] + t * (b[1] - a[1]),
+                0.0,
+            ));
         }
     }
-    let m = out.len();
-    for _ in 0..iters {
-        out = (0..m)
-            .map(|i| {
-                let (a, b, c) = (out[(i + m - 1) % m], out[i], out[(i + 1) % m]);
-                [
-                    0.25 * (a[0] + 2.0 * b[0] + c[0]),
-                    0.25 * (a[1] + 2.0 * b[1] + c[1]),
-                ]
-            })
-            .collect();
-    }
-    out.iter()
-        .map(|p| frame.center + p[0] * frame.e1 + p[1] * frame.e2)
+    // Smoothed like the loops themselves.
+    super::smooth(&out, iters)
+        .iter()
+        .map(|p| frame.center + p.x * frame.e1 + p.y * frame.e2)
         .collect()
 }
 

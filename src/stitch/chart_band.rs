@@ -1,7 +1,7 @@
 //! Glue of the default band ([`super::PointGeneration::Chart`]): loops into the chart, graded
 //! sample, constrained Delaunay triangulation in the annulus plane, harmonic lift to 3D.
 
-use super::chart::{Lift, RefCurve, convex_reference, harmonic};
+use super::chart::{Lift, RefCurve, convex_reference, harmonic, wrap};
 use super::chart_sample::{SampleOptions, sample};
 use super::{
     Band, BandLoops, BandVertex, StitchOptions, mean_edge, smooth, smooth_dirs, triangulate,
@@ -154,10 +154,6 @@ pub(super) fn chart_band(
         }
     }
     Ok(band)
-}
-
-fn wrap(d: f64, period: f64) -> f64 {
-    d - period * (d / period).round()
 }
 
 /// Makes the chart `x` of a closed loop (unwrapped, running once over `period`) strictly
