@@ -183,7 +183,7 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
 /// What holds on the phantom (measured): crown accuracy, and a band no farther from the truth
 /// than the loops it is pinned to (the CBCT cut loop carries the CBCT error, the IOS margin the
 /// gingiva that the labels bleed onto) plus 0.4 mm (measured over 219 teeth: excess median
-/// 0.003 mm, p95 0.14 mm, max 0.36 mm on lower incisors with folded margins).
+/// 0.003 mm, p95 0.13 mm, max 0.36 mm on lower incisors with folded margins).
 fn assert_accuracy(results: &[(u8, Accuracy, f64)]) {
     for (fdi, a, _) in results {
         assert!(a.fused_crown_mean <= 0.03, "tooth {fdi}: {a:?}");
