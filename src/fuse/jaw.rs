@@ -2,7 +2,8 @@
 //! modalities, report the teeth present in only one, and merge everything into one mesh with
 //! per-vertex FDI labels and sources.
 
-use super::{FuseOptions, FusedTooth, VertexSource, fuse_tooth};
+use super::{CutTooth, FuseOptions, VertexSource, cut_tooth, stitch_tooth};
+use super::FusedTooth;
 use crate::mesh::{LabeledMesh, TriMesh, split_by_face_labels, split_by_vertex_labels};
 use crate::{Error, Result, Rigid};
 use std::collections::BTreeMap;
@@ -55,17 +56,70 @@ pub fn ios_crowns(ios: &LabeledMesh) -> Result<BTreeMap<u8, TriMesh>> {
         .collect())
 }
 
-/// Fuses every tooth present in both the IOS (labeled jaw) and the CBCT, with the given
-/// per-tooth transforms into the output frame. A tooth without a transform, or whose fusion
-/// fails, is listed in [`FusedJaw::failed`]; the others are still fused.
-pub fn fuse_jaw(
+/// A jaw after crown removal, before stitching ([`cut_jaw`] → [`stitch_jaw`]).
+#[derive(Clone, Debug, Default)]
+pub struct CutJaw {
+    /// Cut teeth by FDI.
+    pub teeth: BTreeMap<u8, CutTooth>,
+    /// Teeth whose crown is in the IOS but which have no CBCT tooth.
+    pub ios_only: Vec<u8>,
+    /// Teeth in the CBCT without an IOS crown.
+    pub cbct_only: Vec<u8>,
+    /// The CBCT-only teeth in the output frame (under their transform when they have one, else
+    /// as given), for [`FuseOptions::pass_through_cbct_only`] at the stitch stage.
+    pub cbct_only_meshes: BTreeMap<u8, TriMesh>,
+    /// Teeth in both modalities whose cut failed (or that have no transform), with the reason.
+    pub failed: Vec<(u8, Error)>,
+}
+
+/// Maps `f` over `work` on up to 4 threads, results in the order of `work`. Each result depends
+/// on its item only, so the output is the same bit for bit whatever the thread count.
+fn map_teeth<T: Sync, R: Send>(work: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .clamp(1, 4)
+        .min(work.len().max(1));
+    if threads <= 1 {
+        return work.iter().map(f).collect();
+    }
+    std::thread::scope(|s| {
+        let f = &f;
+        let handles: Vec<_> = (0..threads)
+            .map(|k| {
+                s.spawn(move || {
+                    work.iter()
+                        .enumerate()
+                        .skip(k)
+                        .step_by(threads)
+                        .map(|(i, w)| (i, f(w)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        let mut all = Vec::with_capacity(work.len());
+        for h in handles {
+            match h.join() {
+                Ok(r) => all.extend(r),
+                Err(p) => std::panic::resume_unwind(p),
+            }
+        }
+        all.sort_by_key(|r| r.0);
+        all.into_iter().map(|r| r.1).collect()
+    })
+}
+
+/// The crown-removal stage of [`fuse_jaw`]: splits the labeled IOS jaw into crowns and runs
+/// [`cut_tooth`] on every tooth present in both modalities (on up to 4 threads, deterministic).
+/// A tooth without a transform, or whose cut fails, is listed in [`CutJaw::failed`]; the others
+/// are still cut.
+pub fn cut_jaw(
     ios: &LabeledMesh,
     cbct: &BTreeMap<u8, TriMesh>,
     transforms: &BTreeMap<u8, ToothTransforms>,
     opts: &FuseOptions,
-) -> Result<FusedJaw> {
+) -> Result<CutJaw> {
     let crowns = ios_crowns(ios)?;
-    let mut jaw = FusedJaw::default();
+    let mut jaw = CutJaw::default();
     let mut work = Vec::new();
     for (&fdi, crown) in &crowns {
         let Some(tooth) = cbct.get(&fdi) else {
@@ -81,50 +135,19 @@ pub fn fuse_jaw(
         };
         work.push((fdi, crown, tooth, t));
     }
-    // Teeth are independent: fused on up to 4 threads, each result depends on its tooth only,
-    // so the output is the same bit for bit whatever the thread count.
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .clamp(1, 4)
-        .min(work.len().max(1));
-    let fuse_one = |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
-        (
-            fdi,
-            fuse_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts),
-        )
-    };
-    let results: Vec<(u8, Result<FusedTooth>)> = if threads <= 1 {
-        work.iter().map(fuse_one).collect()
-    } else {
-        std::thread::scope(|s| {
-            let handles: Vec<_> = (0..threads)
-                .map(|k| {
-                    let work = &work;
-                    let fuse_one = &fuse_one;
-                    s.spawn(move || {
-                        work.iter()
-                            .skip(k)
-                            .step_by(threads)
-                            .map(fuse_one)
-                            .collect::<Vec<_>>()
-                    })
-                })
-                .collect();
-            let mut all = Vec::new();
-            for h in handles {
-                match h.join() {
-                    Ok(r) => all.extend(r),
-                    Err(p) => std::panic::resume_unwind(p),
-                }
-            }
-            all.sort_by_key(|r| r.0);
-            all
-        })
-    };
+    let results = map_teeth(
+        &work,
+        |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
+            (
+                fdi,
+                cut_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts),
+            )
+        },
+    );
     for (fdi, r) in results {
         match r {
-            Ok(f) => {
-                jaw.teeth.insert(fdi, f);
+            Ok(c) => {
+                jaw.teeth.insert(fdi, c);
             }
             Err(e) => jaw.failed.push((fdi, e)),
         }
@@ -135,29 +158,74 @@ pub fn fuse_jaw(
         .copied()
         .filter(|k| !crowns.contains_key(k))
         .collect();
-    let mut parts: BTreeMap<u8, (TriMesh, Vec<u8>)> = jaw
+    jaw.cbct_only_meshes = jaw
+        .cbct_only
+        .iter()
+        .map(|fdi| {
+            let to_output = transforms
+                .get(fdi)
+                .map(|t| t.cbct_to_output)
+                .unwrap_or_default();
+            (*fdi, cbct[fdi].transformed(&to_output))
+        })
+        .collect();
+    Ok(jaw)
+}
+
+/// The stitching stage of [`fuse_jaw`]: runs [`stitch_tooth`] on every cut tooth (on up to 4
+/// threads, deterministic) and merges the fused teeth (and, with
+/// [`FuseOptions::pass_through_cbct_only`], the CBCT-only teeth) into one mesh. The cut's
+/// failures are carried over; a tooth whose stitching fails joins them. `opts.cut` is not used.
+pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
+    let work: Vec<&CutTooth> = cut.teeth.values().collect();
+    let results = map_teeth(&work, |c| (c.fdi(), stitch_tooth(c, opts)));
+    let mut jaw = FusedJaw {
+        ios_only: cut.ios_only.clone(),
+        cbct_only: cut.cbct_only.clone(),
+        failed: cut.failed.clone(),
+        ..FusedJaw::default()
+    };
+    for (fdi, r) in results {
+        match r {
+            Ok(f) => {
+                jaw.teeth.insert(fdi, f);
+            }
+            Err(e) => jaw.failed.push((fdi, e)),
+        }
+    }
+    jaw.failed.sort_by_key(|f| f.0);
+    let mut parts: BTreeMap<u8, (&TriMesh, Vec<u8>)> = jaw
         .teeth
         .iter()
-        .map(|(&k, f)| (k, (f.mesh.clone(), f.source.clone())))
+        .map(|(&k, f)| (k, (&f.mesh, f.source.clone())))
         .collect();
     if opts.pass_through_cbct_only {
-        for &fdi in &jaw.cbct_only {
-            let m = cbct[&fdi].transformed(
-                &transforms
-                    .get(&fdi)
-                    .map(|t| t.cbct_to_output)
-                    .unwrap_or_default(),
-            );
-            let n = m.positions.len();
-            parts.insert(fdi, (m, vec![VertexSource::Cbct as u8; n]));
+        for (&fdi, m) in &cut.cbct_only_meshes {
+            parts.insert(fdi, (m, vec![VertexSource::Cbct as u8; m.positions.len()]));
             jaw.passed_through.push(fdi);
         }
     }
+    let (mut mesh, mut labels, mut source) = (TriMesh::default(), Vec::new(), Vec::new());
     for (fdi, (m, s)) in parts {
-        jaw.mesh.append(&m);
-        jaw.labels
-            .extend(std::iter::repeat_n(fdi as i32, m.positions.len()));
-        jaw.source.extend(s);
+        mesh.append(m);
+        labels.extend(std::iter::repeat_n(fdi as i32, m.positions.len()));
+        source.extend(s);
     }
-    Ok(jaw)
+    jaw.mesh = mesh;
+    jaw.labels = labels;
+    jaw.source = source;
+    jaw
+}
+
+/// Fuses every tooth present in both the IOS (labeled jaw) and the CBCT, with the given
+/// per-tooth transforms into the output frame: [`stitch_jaw`] of [`cut_jaw`]. A tooth without a
+/// transform, or whose fusion fails, is listed in [`FusedJaw::failed`]; the others are still
+/// fused.
+pub fn fuse_jaw(
+    ios: &LabeledMesh,
+    cbct: &BTreeMap<u8, TriMesh>,
+    transforms: &BTreeMap<u8, ToothTransforms>,
+    opts: &FuseOptions,
+) -> Result<FusedJaw> {
+    Ok(stitch_jaw(&cut_jaw(ios, cbct, transforms, opts)?, opts))
 }

@@ -7,9 +7,9 @@ mod jaw;
 pub mod quality;
 mod tooth;
 
-pub use jaw::{FusedJaw, ToothTransforms, fuse_jaw, ios_crowns};
+pub use jaw::{CutJaw, FusedJaw, ToothTransforms, cut_jaw, fuse_jaw, ios_crowns, stitch_jaw};
 pub use quality::ToothQuality;
-pub use tooth::{FusedTooth, fuse_tooth};
+pub use tooth::{CutTooth, FusedTooth, cut_tooth, fuse_tooth, stitch_tooth};
 
 use crate::cut::{CutMethod, CutOptions};
 use crate::stitch::interp::InterpOptions;

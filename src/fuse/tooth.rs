@@ -4,7 +4,7 @@
 
 use super::quality::{self, ToothQuality};
 use super::{FuseOptions, VertexSource};
-use crate::cut::{self, ToothFrame};
+use crate::cut::{self, RootCut, ToothFrame};
 use crate::mesh::{EdgeTopology, RepairOptions, TriMesh, boundary_loops, repair_open_surface};
 use crate::stitch::{self, BandLoops, BandVertex};
 use crate::{Error, Result, Rigid};
@@ -27,11 +27,88 @@ pub struct FusedTooth {
     pub quality: ToothQuality,
     /// Warnings (filled holes, flipped input orientation, self-intersections).
     pub warnings: Vec<String>,
-    /// Time (ms) spent in crown removal (repair, frame, cut) and in stitching (band, assembly,
-    /// flips, quality report) for this tooth.
+    /// Time (ms) spent in crown removal (repair, frame, cut: [`CutTooth::cut_ms`]) and in
+    /// stitching (band, assembly, flips, quality report) for this tooth.
     pub cut_ms: f64,
     /// See [`FusedTooth::cut_ms`].
     pub stitch_ms: f64,
+}
+
+/// A tooth after crown removal, before stitching ([`cut_tooth`] → [`stitch_tooth`]): the
+/// repaired IOS crown and the cut CBCT root, both in the output frame, with everything the band
+/// needs. Made only by [`cut_tooth`], so its loops always index its meshes.
+#[derive(Clone, Debug)]
+pub struct CutTooth {
+    fdi: u8,
+    crown: TriMesh,
+    margin: Vec<u32>,
+    crown_dirs: Vec<DVec3>,
+    frame: ToothFrame,
+    ios_vertex: Vec<u32>,
+    kept_ios: usize,
+    holes_filled: usize,
+    root: RootCut,
+    root_dirs: Vec<DVec3>,
+    chords: Vec<(BandVertex, BandVertex)>,
+    warnings: Vec<String>,
+    cut_ms: f64,
+}
+
+impl CutTooth {
+    /// FDI number.
+    pub fn fdi(&self) -> u8 {
+        self.fdi
+    }
+
+    /// The repaired IOS crown in the output frame, outward-oriented: an open disk whose one
+    /// boundary loop is [`CutTooth::margin`]. It becomes the first vertices of the fused mesh.
+    pub fn crown(&self) -> &TriMesh {
+        &self.crown
+    }
+
+    /// The gingival margin: the crown's boundary loop (crown vertex indices, crown on the left
+    /// seen from outside).
+    pub fn margin(&self) -> &[u32] {
+        &self.margin
+    }
+
+    /// Per crown vertex: the index of the IOS crown input vertex it is, or `u32::MAX` for a
+    /// vertex added by the repair (hole fill).
+    pub fn ios_vertex(&self) -> &[u32] {
+        &self.ios_vertex
+    }
+
+    /// The tooth frame (axis root → crown) found from the margin.
+    pub fn frame(&self) -> &ToothFrame {
+        &self.frame
+    }
+
+    /// The cut: the CBCT root in the output frame (an open disk, CBCT positions under
+    /// `cbct_to_output`), its vertices' CBCT input indices, its single boundary loop and the
+    /// number of crown faces removed.
+    pub fn root(&self) -> &RootCut {
+        &self.root
+    }
+
+    /// The root's boundary loop (root vertex indices), where the band meets the root.
+    pub fn cut_loop(&self) -> &[u32] {
+        &self.root.cut_loop
+    }
+
+    /// IOS crown holes filled by the repair.
+    pub fn holes_filled(&self) -> usize {
+        self.holes_filled
+    }
+
+    /// Warnings of the cut stage (repair, flipped orientations, dropped vertices).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Time (ms) spent in this tooth's cut stage (repair, frame, cut, loop directions).
+    pub fn cut_ms(&self) -> f64 {
+        self.cut_ms
+    }
 }
 
 /// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
@@ -55,7 +132,7 @@ fn loop_dirs(mesh: &TriMesh, lp: &[u32], axis: DVec3) -> Vec<DVec3> {
 /// Fuses one tooth. `ios_crown` (IOS frame) is an open crown whose longest boundary loop is the
 /// gingival margin; it is repaired first ([`repair_open_surface`]: small holes filled, bow-ties
 /// split, islands dropped). `cbct` (CBCT frame) must
-/// be closed and manifold.
+/// be closed and manifold. Equals [`stitch_tooth`] of [`cut_tooth`], bit for bit.
 pub fn fuse_tooth(
     fdi: u8,
     ios_crown: &TriMesh,
@@ -64,18 +141,33 @@ pub fn fuse_tooth(
     cbct_to_output: &Rigid,
     opts: &FuseOptions,
 ) -> Result<FusedTooth> {
-    fuse_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts)
-        .map_err(|e| e.in_tooth(fdi))
+    let cut = cut_tooth(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts)?;
+    stitch_tooth(&cut, opts)
 }
 
-fn fuse_inner(
+/// The crown-removal stage of [`fuse_tooth`] (paper section 2.3.1): repairs the IOS crown and
+/// moves it into the output frame, finds its margin loop and the tooth frame, and cuts the CBCT
+/// crown off along the margin (`opts.cut`), keeping the root. Errors name the tooth.
+pub fn cut_tooth(
     fdi: u8,
     ios_crown: &TriMesh,
     cbct: &TriMesh,
     ios_to_output: &Rigid,
     cbct_to_output: &Rigid,
     opts: &FuseOptions,
-) -> Result<FusedTooth> {
+) -> Result<CutTooth> {
+    cut_inner(fdi, ios_crown, cbct, ios_to_output, cbct_to_output, opts)
+        .map_err(|e| e.in_tooth(fdi))
+}
+
+fn cut_inner(
+    fdi: u8,
+    ios_crown: &TriMesh,
+    cbct: &TriMesh,
+    ios_to_output: &Rigid,
+    cbct_to_output: &Rigid,
+    opts: &FuseOptions,
+) -> Result<CutTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = Vec::new();
     // Real crowns are messy: make the crown one oriented manifold disk, filling small holes
@@ -111,9 +203,55 @@ fn fuse_inner(
         margin.reverse();
         warnings.push("IOS crown was inward-oriented; flipped".into());
     }
-    let mut mesh = crown;
-    let mut ios_vertex = rep_src;
-    let source: Vec<u8> = ios_vertex
+    let ios_vertex = rep_src;
+    let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
+    let dropped = ios_crown.positions.len().saturating_sub(kept_ios);
+    if dropped > 0 {
+        warnings.push(format!(
+            "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
+        ));
+    }
+    let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
+    // Crown removal.
+    let rc = cut::cut_crown(&root_in, &margin_pts_of(&crown, &margin), &frame, &opts.cut)?;
+    let root_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
+    let chords = loop_chords(&crown, &margin, BandVertex::Upper)
+        .into_iter()
+        .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
+        .collect::<Vec<_>>();
+    let cut_ms = t_start.elapsed().as_secs_f64() * 1e3;
+    Ok(CutTooth {
+        fdi,
+        crown,
+        margin,
+        crown_dirs,
+        frame,
+        ios_vertex,
+        kept_ios,
+        holes_filled: rep.filled_holes,
+        root: rc,
+        root_dirs,
+        chords,
+        warnings,
+        cut_ms,
+    })
+}
+
+/// The stitching stage of [`fuse_tooth`] (paper Algorithm 1): builds the band between the
+/// crown's margin loop and the root's cut loop (`opts.stitch`), assembles crown + band + root
+/// into one closed mesh, optimises the band and measures the quality. `opts.cut` is not used (the
+/// cut is done). Errors name the tooth.
+pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
+    stitch_inner(cut, opts).map_err(|e| e.in_tooth(cut.fdi))
+}
+
+fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
+    let t_start = std::time::Instant::now();
+    let (margin, frame, rc) = (&ct.margin, &ct.frame, &ct.root);
+    let mut warnings = ct.warnings.clone();
+    let mut mesh = ct.crown.clone();
+    let mut ios_vertex = ct.ios_vertex.clone();
+    let mut source: Vec<u8> = ios_vertex
         .iter()
         .map(|&s| {
             if s == u32::MAX {
@@ -123,38 +261,17 @@ fn fuse_inner(
             }
         })
         .collect();
-    let mut source = source;
-    let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
-    let dropped = ios_crown.positions.len().saturating_sub(kept_ios);
-    if dropped > 0 {
-        warnings.push(format!(
-            "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
-        ));
-    }
-    let crown_dirs = loop_dirs(&mesh, &margin, frame.axis);
-    // Crown removal.
-    let rc = cut::cut_crown(&root_in, &margin_pts_of(&mesh, &margin), &frame, &opts.cut)?;
-    let lower_pts: Vec<DVec3> = rc
-        .cut_loop
-        .iter()
-        .map(|&v| rc.root.positions[v as usize])
-        .collect();
-    let lower_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
-    let upper_pts = margin_pts_of(&mesh, &margin);
-    let chords = loop_chords(&mesh, &margin, BandVertex::Upper)
-        .into_iter()
-        .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
-        .collect::<Vec<_>>();
-    let cut_ms = t_start.elapsed().as_secs_f64() * 1e3;
+    let lower_pts = margin_pts_of(&rc.root, &rc.cut_loop);
+    let upper_pts = margin_pts_of(&mesh, margin);
     let band = stitch::build_band(
         &BandLoops {
             upper: &upper_pts,
-            upper_dir: &crown_dirs,
+            upper_dir: &ct.crown_dirs,
             lower: &lower_pts,
-            lower_dir: &lower_dirs,
-            chords: &chords,
+            lower_dir: &ct.root_dirs,
+            chords: &ct.chords,
         },
-        &frame,
+        frame,
         &opts.stitch,
     )?;
     // Assemble: band interior, then root.
@@ -211,8 +328,8 @@ fn fuse_inner(
         super::band_opt::flip_band(&mut mesh, band_start..band_end, 6);
     }
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
-    q.crown_vertices = kept_ios;
-    q.holes_filled = rep.filled_holes;
+    q.crown_vertices = ct.kept_ios;
+    q.holes_filled = ct.holes_filled;
     q.cbct_faces_removed = rc.removed_faces;
     if !(q.closed && q.manifold && q.components == 1) {
         let topo = EdgeTopology::new(&mesh);
@@ -236,16 +353,15 @@ fn fuse_inner(
     if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
         warnings.push(format!("{n} intersecting face pairs"));
     }
-    let _ = fdi;
-    let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3 - cut_ms;
+    let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3;
     Ok(FusedTooth {
-        fdi,
+        fdi: ct.fdi,
         mesh,
         source,
         ios_vertex,
         quality: q,
         warnings,
-        cut_ms,
+        cut_ms: ct.cut_ms,
         stitch_ms,
     })
 }

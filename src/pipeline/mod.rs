@@ -13,7 +13,9 @@ pub mod report;
 pub use report::{PipelineReport, PipelineTooth};
 
 use crate::Result;
-use crate::fuse::{self, FuseOptions, FusedJaw, ToothTransforms, fuse_jaw, ios_crowns};
+use crate::fuse::{
+    self, CutJaw, FuseOptions, FusedJaw, ToothTransforms, cut_jaw, ios_crowns, stitch_jaw,
+};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::register::{OutputFrame, Preset, RegisterOptions, Registration, register};
 use std::collections::BTreeMap;
@@ -62,8 +64,11 @@ impl PipelineOptions {
 pub struct PipelineTiming {
     /// Registration.
     pub register_ms: f64,
-    /// Crown removal, stitching and assembly of all teeth ([`fuse_jaw`], wall time; the split
-    /// between cut and stitch is in the report, from each tooth's `cut_ms` / `stitch_ms`).
+    /// Crown removal of all teeth ([`cut_jaw`], wall time).
+    pub cut_ms: f64,
+    /// Stitching and assembly of all teeth ([`stitch_jaw`], wall time).
+    pub stitch_ms: f64,
+    /// Crown removal, stitching and assembly of all teeth: `cut_ms + stitch_ms`.
     pub fuse_ms: f64,
     /// Everything, including splitting the IOS jaw into crowns.
     pub total_ms: f64,
@@ -80,7 +85,20 @@ pub struct PipelineResult {
     pub timing: PipelineTiming,
 }
 
-/// The per-tooth transforms of a registration, as [`fuse_jaw`] takes them.
+/// The result of [`cut`]: the registration it used and the cut jaw, before stitching.
+#[derive(Clone, Debug)]
+pub struct PipelineCut {
+    /// The registration whose transforms placed the teeth in the output frame.
+    pub registration: Registration,
+    /// Per tooth the repaired IOS crown and the cut CBCT root, failed teeth.
+    pub jaw: CutJaw,
+    /// Registration time carried over to the result (0 when the registration was given).
+    pub register_ms: f64,
+    /// Wall time of the cut (ms).
+    pub cut_ms: f64,
+}
+
+/// The per-tooth transforms of a registration, as [`fuse::fuse_jaw`] takes them.
 pub fn transforms_of(r: &Registration) -> BTreeMap<u8, ToothTransforms> {
     r.teeth
         .iter()
@@ -98,7 +116,7 @@ pub fn transforms_of(r: &Registration) -> BTreeMap<u8, ToothTransforms> {
 
 /// One-call fuse of a labeled IOS jaw (per-vertex or per-face FDI labels, 0 = gingiva) with
 /// CBCT teeth (closed meshes by FDI, CBCT frame): register, then cut and stitch every tooth
-/// present in both. Equals [`register`] on [`ios_crowns`] followed by [`fuse_jaw`] with the
+/// present in both. Equals [`register`] on [`ios_crowns`] followed by [`fuse::fuse_jaw`] with the
 /// registered transforms, bit for bit.
 pub fn fuse(
     ios: &LabeledMesh,
@@ -111,7 +129,7 @@ pub fn fuse(
 }
 
 /// One-call fuse of per-tooth IOS crowns (open meshes by FDI, IOS frame) with CBCT teeth; see
-/// [`fuse`]. The crowns are merged into one labeled mesh for [`fuse_jaw`] (vertices not used by a
+/// [`fuse`]. The crowns are merged into one labeled mesh for [`fuse::fuse_jaw`] (vertices not used by a
 /// face are dropped there).
 pub fn fuse_crowns(
     crowns: &BTreeMap<u8, TriMesh>,
@@ -126,28 +144,56 @@ pub fn fuse_crowns(
 
 /// Cut and stitch only, with an existing registration (e.g. one made earlier by
 /// [`crate::register::register`] with the same teeth): the second half of [`fuse_crowns`], for
-/// hosts that register once and fuse with other fusion options. The result holds a copy of
-/// `registration` and `register_ms` = 0. Teeth without a registered transform are reported
-/// failed by [`fuse_jaw`].
+/// hosts that register once and fuse with other fusion options. [`stitch`] of [`cut`]: the
+/// result holds a copy of `registration` and `register_ms` = 0. Teeth without a registered
+/// transform are reported failed.
 pub fn fuse_crowns_registered(
     crowns: &BTreeMap<u8, TriMesh>,
     cbct: &BTreeMap<u8, TriMesh>,
     registration: &Registration,
     opts: &PipelineOptions,
 ) -> Result<PipelineResult> {
+    Ok(stitch(&cut(crowns, cbct, registration, opts)?, opts))
+}
+
+/// The crown-removal stage with an existing registration: the crowns merged into one labeled
+/// jaw, then [`cut_jaw`] with the registered transforms and `opts.fuse`. Teeth without a
+/// registered transform are reported failed.
+pub fn cut(
+    crowns: &BTreeMap<u8, TriMesh>,
+    cbct: &BTreeMap<u8, TriMesh>,
+    registration: &Registration,
+    opts: &PipelineOptions,
+) -> Result<PipelineCut> {
     let t0 = Instant::now();
     let jaw = merge_crowns(crowns)?;
-    let fused = fuse_jaw(&jaw, cbct, &transforms_of(registration), &opts.fuse)?;
-    let fuse_ms = ms(t0);
-    Ok(PipelineResult {
+    let cut = cut_jaw(&jaw, cbct, &transforms_of(registration), &opts.fuse)?;
+    Ok(PipelineCut {
         registration: registration.clone(),
-        jaw: fused,
-        timing: PipelineTiming {
-            register_ms: 0.0,
-            fuse_ms,
-            total_ms: ms(t0),
-        },
+        jaw: cut,
+        register_ms: 0.0,
+        cut_ms: ms(t0),
     })
+}
+
+/// The stitching stage: [`stitch_jaw`] of a [`cut`] with `opts.fuse` (its cut options are not
+/// used). Timing: the cut's `register_ms` and `cut_ms`, the stitch's wall time, `total_ms` their
+/// sum.
+pub fn stitch(cut: &PipelineCut, opts: &PipelineOptions) -> PipelineResult {
+    let t0 = Instant::now();
+    let jaw = stitch_jaw(&cut.jaw, &opts.fuse);
+    let stitch_ms = ms(t0);
+    PipelineResult {
+        registration: cut.registration.clone(),
+        jaw,
+        timing: PipelineTiming {
+            register_ms: cut.register_ms,
+            cut_ms: cut.cut_ms,
+            stitch_ms,
+            fuse_ms: cut.cut_ms + stitch_ms,
+            total_ms: cut.register_ms + cut.cut_ms + stitch_ms,
+        },
+    }
 }
 
 /// Per-tooth crowns merged into one mesh with per-vertex FDI labels.
@@ -176,14 +222,19 @@ fn run(
     let registration = register(crowns, cbct, &ro)?;
     let register_ms = ms(t1);
     let t2 = Instant::now();
-    let jaw = fuse_jaw(ios, cbct, &transforms_of(&registration), &opts.fuse)?;
-    let fuse_ms = ms(t2);
+    let cut = cut_jaw(ios, cbct, &transforms_of(&registration), &opts.fuse)?;
+    let cut_ms = ms(t2);
+    let t3 = Instant::now();
+    let jaw = stitch_jaw(&cut, &opts.fuse);
+    let stitch_ms = ms(t3);
     Ok(PipelineResult {
         registration,
         jaw,
         timing: PipelineTiming {
             register_ms,
-            fuse_ms,
+            cut_ms,
+            stitch_ms,
+            fuse_ms: cut_ms + stitch_ms,
             total_ms: ms(t0),
         },
     })

@@ -74,22 +74,10 @@ impl PipelineResult {
         }
         skipped.sort_by_key(|s| s.fdi);
         let tm = &self.timing;
-        // Teeth are fused in parallel: the fuse wall time is split between cut and stitch in
-        // proportion to the teeth's summed time in each stage.
-        let (cut_sum, stitch_sum) = self
-            .jaw
-            .teeth
-            .values()
-            .fold((0.0, 0.0), |(c, s), t| (c + t.cut_ms, s + t.stitch_ms));
-        let cut_share = if cut_sum + stitch_sum > 0.0 {
-            cut_sum / (cut_sum + stitch_sum)
-        } else {
-            0.5
-        };
         let timing_ms = [
             ("register", tm.register_ms),
-            ("cut", tm.fuse_ms * cut_share),
-            ("stitch", tm.fuse_ms * (1.0 - cut_share)),
+            ("cut", tm.cut_ms),
+            ("stitch", tm.stitch_ms),
             ("fuse", tm.fuse_ms),
             ("total", tm.total_ms),
         ]
@@ -102,10 +90,9 @@ impl PipelineResult {
             skipped,
             sd_mm: reg.sd_mm,
             timing_ms,
-            timing_note:
-                "fuse = cut + stitch (wall time); teeth are fused in parallel, so cut and \
-                          stitch split it in proportion to the teeth's summed time in each stage"
-                    .into(),
+            timing_note: "wall time of each stage; fuse = cut + stitch; within a stage the teeth \
+                          are processed in parallel"
+                .into(),
         }
     }
 
