@@ -19,22 +19,26 @@
 //! positions; bow-tie vertices are duplicated; added hole-centre vertices have no source vertex,
 //! [`NO_SOURCE`]). Off by default: input is then kept exactly or rejected.
 //!
-//! Results: [`Session::register`] registers the held teeth ([`crate::register`]) and
-//! [`Session::fuse`] registers, cuts and stitches them ([`crate::pipeline`]); both keep their
-//! result on the session. Any change of the held teeth (add, replace, remove, clear) drops the
-//! results; a failed register or fuse keeps the previous results.
+//! Results: [`Session::register`] registers the held teeth ([`crate::register`]),
+//! [`Session::cut`] and [`Session::stitch`] run the two fusion stages with that registration, and
+//! [`Session::fuse`] registers, cuts and stitches them in one call ([`crate::pipeline`]); each
+//! keeps its result on the session. Any change of the held teeth (add, replace, remove, clear)
+//! drops the results; a failed call keeps the previous results.
 
 use crate::arch::{check_fdi, is_valid_fdi};
 use crate::mesh::{
     LabelDomain, RepairOptions, RepairReport, ValidateOptions, ValidationReport,
     repair_open_surface, split_by_face_labels, split_by_vertex_labels,
 };
-use crate::pipeline::{self, PipelineOptions, PipelineResult};
-use crate::register::{Registration, register};
+use crate::pipeline::PipelineCut;
+use crate::register::Registration;
 use crate::{Error, Result, TriMesh};
 use std::collections::BTreeMap;
-use std::ffi::CString;
 use std::fmt;
+
+mod results;
+
+pub use results::{Fused, Notes};
 
 /// Where a tooth mesh comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -90,74 +94,9 @@ pub struct Session {
     cbct: BTreeMap<u8, Tooth>,
     ios_repair: Option<RepairOptions>,
     registration: Option<Registration>,
+    cut: Option<PipelineCut>,
     fused: Option<Fused>,
     notes: Notes,
-}
-
-/// NUL-terminated copies of the result messages, for borrowed `const char *` views in the C ABI:
-/// per tooth, the registration's then the fusion's warnings; the skipped teeth with the reason.
-#[derive(Clone, Debug, Default)]
-pub struct Notes {
-    /// Warnings per registered tooth.
-    pub warnings: BTreeMap<u8, Vec<CString>>,
-    /// Teeth not registered or not fused, with the reason, in FDI order.
-    pub skipped: Vec<(u8, CString)>,
-}
-
-fn c_string(s: &str) -> CString {
-    CString::new(s.bytes().filter(|&b| b != 0).collect::<Vec<u8>>()).unwrap_or_default()
-}
-
-impl Notes {
-    fn of_registration(r: &Registration) -> Self {
-        Notes {
-            warnings: r
-                .teeth
-                .iter()
-                .map(|(&f, t)| (f, t.warnings.iter().map(|w| c_string(w)).collect()))
-                .collect(),
-            skipped: r
-                .skipped
-                .iter()
-                .map(|k| (k.fdi, c_string(&k.reason)))
-                .collect(),
-        }
-    }
-
-    fn of_fused(f: &PipelineResult) -> Self {
-        let rep = f.report();
-        Notes {
-            warnings: rep
-                .teeth
-                .iter()
-                .map(|t| {
-                    let r = &t.registration;
-                    (r.fdi, r.warnings.iter().map(|w| c_string(w)).collect())
-                })
-                .chain(
-                    f.registration
-                        .teeth
-                        .iter()
-                        .filter(|(k, _)| !f.jaw.teeth.contains_key(k))
-                        .map(|(&k, t)| (k, t.warnings.iter().map(|w| c_string(w)).collect())),
-                )
-                .collect(),
-            skipped: rep
-                .skipped
-                .iter()
-                .map(|k| (k.fdi, c_string(&k.reason)))
-                .collect(),
-        }
-    }
-}
-
-/// The result of [`Session::fuse`]: the pipeline's result and its report as JSON.
-#[derive(Clone, Debug)]
-pub struct Fused {
-    /// Registration, fused jaw and timing.
-    pub result: PipelineResult,
-    /// The report of the `toothfuse fuse` output contract, pretty-printed JSON.
-    pub report_json: String,
 }
 
 impl Session {
@@ -369,6 +308,7 @@ impl Session {
 
     fn drop_results(&mut self) {
         self.registration = None;
+        self.cut = None;
         self.fused = None;
         self.notes = Notes::default();
     }
@@ -384,96 +324,6 @@ impl Session {
             .iter()
             .map(|(&f, t)| (f, t.mesh.clone()))
             .collect()
-    }
-
-    /// Registers the held CBCT teeth to the held IOS crowns with `opts.register` (its frame set
-    /// to `opts.frame`) and keeps the result, replacing any earlier registration and dropping
-    /// earlier fusion results. Fails with `MissingData` when fewer than three teeth are in both
-    /// modalities; on failure the session keeps its previous results.
-    pub fn register(&mut self, opts: &PipelineOptions) -> Result<&Registration> {
-        let mut ro = opts.register.clone();
-        ro.frame = opts.frame;
-        let r = register(
-            &self.meshes(Modality::Ios),
-            &self.meshes(Modality::Cbct),
-            &ro,
-        )?;
-        self.fused = None;
-        self.notes = Notes::of_registration(&r);
-        Ok(self.registration.insert(r))
-    }
-
-    /// One-call fuse: always registers anew with `opts` (so the transforms and the fused meshes
-    /// come from the same options), then cuts and stitches every tooth present in both
-    /// modalities ([`pipeline::fuse_crowns`]). A tooth whose fusion fails is listed as skipped
-    /// with the reason; the others are delivered. On failure the session keeps its previous
-    /// results.
-    pub fn fuse(&mut self, opts: &PipelineOptions) -> Result<&Fused> {
-        let result = pipeline::fuse_crowns(
-            &self.meshes(Modality::Ios),
-            &self.meshes(Modality::Cbct),
-            opts,
-        )?;
-        self.keep_fused(result, true)
-    }
-
-    /// Cut and stitch only, with the session's last registration ([`Session::register`] or an
-    /// earlier [`Session::fuse`]) and the fusion options of `opts` (its registration options are
-    /// not used): for hosts that register once and fuse again with other options. `WrongState`
-    /// without a registration; on failure the session keeps its previous results.
-    pub fn fuse_registered(&mut self, opts: &PipelineOptions) -> Result<&Fused> {
-        let reg = self.registration()?.clone();
-        let result = pipeline::fuse_crowns_registered(
-            &self.meshes(Modality::Ios),
-            &self.meshes(Modality::Cbct),
-            &reg,
-            opts,
-        )?;
-        self.keep_fused(result, false)
-    }
-
-    /// Keeps a fusion result (with its report JSON and notes), and its registration when
-    /// `new_registration`; nothing changes if the report cannot be serialised.
-    fn keep_fused(&mut self, result: PipelineResult, new_registration: bool) -> Result<&Fused> {
-        let report_json = serde_json::to_string_pretty(&result.report())
-            .map_err(|e| Error::InvalidArgument(format!("report serialisation failed: {e}")))?;
-        if new_registration {
-            self.registration = Some(result.registration.clone());
-        }
-        self.notes = Notes::of_fused(&result);
-        Ok(self.fused.insert(Fused {
-            result,
-            report_json,
-        }))
-    }
-
-    /// The last registration (by [`Session::register`] or [`Session::fuse`]); `WrongState` if
-    /// none since the teeth last changed.
-    pub fn registration(&self) -> Result<&Registration> {
-        self.registration.as_ref().ok_or_else(|| {
-            Error::WrongState(
-                "no registration: call register (or fuse) after the last change of teeth".into(),
-            )
-        })
-    }
-
-    /// The report JSON of the last result: the fuse report (`toothfuse fuse` contract) after
-    /// [`Session::fuse`], else the registration report; `WrongState` when there is neither.
-    pub fn report_json(&self) -> Result<String> {
-        match (&self.fused, &self.registration) {
-            (Some(f), _) => Ok(f.report_json.clone()),
-            (None, Some(r)) => Ok(r.to_json()),
-            (None, None) => Err(Error::WrongState(
-                "no result: call register or fuse after the last change of teeth".into(),
-            )),
-        }
-    }
-
-    /// The last fusion result; `WrongState` if none since the teeth last changed.
-    pub fn fused(&self) -> Result<&Fused> {
-        self.fused.as_ref().ok_or_else(|| {
-            Error::WrongState("no fused result: call fuse after the last change of teeth".into())
-        })
     }
 }
 
