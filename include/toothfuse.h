@@ -174,8 +174,8 @@ typedef struct toothfuse_options {
 
 /**
  * A borrowed, read-only view of a fused mesh. The pointers point into the session: valid
- * until the session's teeth or results change (add, replace, remove, clear, register, fuse) or
- * it is freed; never free them.
+ * until the session's teeth or results change (add, replace, remove, clear, register, fuse,
+ * stitch) or it is freed; never free them.
  */
 typedef struct toothfuse_fused_view {
   /**
@@ -530,8 +530,9 @@ toothfuse_status toothfuse_session_fuse(struct toothfuse_session *session,
  * root with the session's last registration (from `toothfuse_session_register`, or an earlier
  * fuse) instead of registering again — for hosts that register once and fuse again with other
  * fusion options (`options`: NULL = defaults; its registration fields and frame are not used,
- * the output frame is the registration's). WRONG_STATE without a registration (or after the
- * teeth changed); on any failure the previous results are kept.
+ * the output frame is the registration's). The same as `toothfuse_session_cut` then
+ * `toothfuse_session_stitch` (the cut is kept). WRONG_STATE without a registration (or after
+ * the teeth changed); on any failure the previous results are kept.
  *
  * # Safety
  * `session` must be NULL or a live session; `options` NULL or a valid options struct.
@@ -995,6 +996,107 @@ toothfuse_status toothfuse_session_list_teeth(const struct toothfuse_session *se
                                               int32_t *fdi_out,
                                               size_t capacity,
                                               size_t *count_out);
+
+/**
+ * Crown removal with the session's last registration (`toothfuse_session_register`, or an
+ * earlier fuse): each IOS crown present in both modalities is repaired and moved into the
+ * output frame, and its CBCT tooth cut along the IOS gingival margin, keeping the root (paper
+ * section 2.3.1; `options`: NULL = defaults, only its fusion settings are used, the output
+ * frame is the registration's). The cut is kept on the session for `toothfuse_session_stitch`
+ * (replacing an earlier cut; fused results are kept) until the teeth change or a new register
+ * or fuse. A tooth whose cut fails is listed by `toothfuse_session_skipped` with the reason.
+ * WRONG_STATE without a registration; on any failure the previous results are kept.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `options` NULL or a valid options struct.
+ */
+toothfuse_status toothfuse_session_cut(struct toothfuse_session *session,
+                                       const struct toothfuse_options *options);
+
+/**
+ * Stitching on the held cut: per cut tooth, the band between the IOS margin and the CBCT cut
+ * loop, crown + band + root assembled into one closed, manifold mesh (paper Algorithm 1;
+ * `options`: NULL = defaults, its cut settings are not used: the cut is done). The fused
+ * results replace earlier ones and are read with the fused getters; the cut stays, so it can be
+ * stitched again. WRONG_STATE without a cut (none yet, or dropped by a change of teeth, a new
+ * register or fuse); on any failure the previous results are kept.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `options` NULL or a valid options struct.
+ */
+toothfuse_status toothfuse_session_stitch(struct toothfuse_session *session,
+                                          const struct toothfuse_options *options);
+
+/**
+ * Copies the FDI numbers of the cut teeth, ascending, into `fdi_out` (room for `capacity`) and
+ * writes how many to `*count_out`; BUFFER_TOO_SMALL (nothing written) when `capacity` is below
+ * the count (52 always suffices). WRONG_STATE without a cut.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `fdi_out` must have room for `capacity` `int32_t`;
+ * `count_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_cut_teeth(const struct toothfuse_session *session,
+                                             int32_t *fdi_out,
+                                             size_t capacity,
+                                             size_t *count_out);
+
+/**
+ * Writes the sizes of the cut root of tooth `fdi`: its vertex count, index count (3 per
+ * triangle) and the length of its cut loop (its one boundary loop, where the band meets the
+ * root). WRONG_STATE without a cut; MISSING_DATA for a tooth that was not cut.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; the outputs NULL or writable.
+ */
+toothfuse_status toothfuse_session_cut_size(const struct toothfuse_session *session,
+                                            int32_t fdi,
+                                            size_t *vertex_count_out,
+                                            size_t *index_count_out,
+                                            size_t *loop_count_out);
+
+/**
+ * Copies the vertices of the cut root of tooth `fdi` (output frame; the CBCT vertices kept, at
+ * their positions under CBCT→output, exactly the fused mesh's CBCT-source vertices) as
+ * `toothfuse_session_copy_vertices` does (strided, float or double; BUFFER_TOO_SMALL when
+ * `vertex_capacity` is below the count).
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `vertices_out` must hold
+ * `(vertex_capacity - 1) * stride_bytes + 3 * sizeof(scalar)` writable bytes.
+ */
+toothfuse_status toothfuse_session_copy_cut_vertices(const struct toothfuse_session *session,
+                                                     int32_t fdi,
+                                                     void *vertices_out,
+                                                     size_t vertex_capacity,
+                                                     size_t stride_bytes,
+                                                     toothfuse_scalar scalar);
+
+/**
+ * Copies the triangle indices of the cut root of tooth `fdi`, 3 per triangle, outward
+ * (counter-clockwise seen from outside); BUFFER_TOO_SMALL (nothing written) when
+ * `index_capacity` is below the index count.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `indices_out` room for `index_capacity` `uint32_t`.
+ */
+toothfuse_status toothfuse_session_copy_cut_indices(const struct toothfuse_session *session,
+                                                    int32_t fdi,
+                                                    uint32_t *indices_out,
+                                                    size_t index_capacity);
+
+/**
+ * Copies the cut loop of tooth `fdi`: the root's one boundary loop as root vertex indices, in
+ * order (root surface on the left seen from outside); BUFFER_TOO_SMALL (nothing written) when
+ * `capacity` is below the loop length.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `loop_out` room for `capacity` `uint32_t`.
+ */
+toothfuse_status toothfuse_session_copy_cut_loop(const struct toothfuse_session *session,
+                                                 int32_t fdi,
+                                                 uint32_t *loop_out,
+                                                 size_t capacity);
 
 /**
  * A static, NUL-terminated English description of `status` (any value is accepted; unknown

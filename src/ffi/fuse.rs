@@ -50,8 +50,9 @@ pub unsafe extern "C" fn toothfuse_session_fuse(
 /// root with the session's last registration (from `toothfuse_session_register`, or an earlier
 /// fuse) instead of registering again — for hosts that register once and fuse again with other
 /// fusion options (`options`: NULL = defaults; its registration fields and frame are not used,
-/// the output frame is the registration's). WRONG_STATE without a registration (or after the
-/// teeth changed); on any failure the previous results are kept.
+/// the output frame is the registration's). The same as `toothfuse_session_cut` then
+/// `toothfuse_session_stitch` (the cut is kept). WRONG_STATE without a registration (or after
+/// the teeth changed); on any failure the previous results are kept.
 ///
 /// # Safety
 /// `session` must be NULL or a live session; `options` NULL or a valid options struct.
@@ -177,8 +178,8 @@ pub unsafe extern "C" fn toothfuse_session_fused_size(
 }
 
 /// A borrowed, read-only view of a fused mesh. The pointers point into the session: valid
-/// until the session's teeth or results change (add, replace, remove, clear, register, fuse) or
-/// it is freed; never free them.
+/// until the session's teeth or results change (add, replace, remove, clear, register, fuse,
+/// stitch) or it is freed; never free them.
 #[repr(C)]
 #[allow(non_camel_case_types)]
 #[derive(Clone, Copy, Debug)]

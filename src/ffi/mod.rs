@@ -11,13 +11,15 @@
 //!
 //! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
 //! (reading a tooth back), [`register`] (options, registration and its report), [`fuse`]
-//! (one-call fuse, fused meshes and their quality), plus [`status`], [`version`] and the [`boundary`] helpers.
+//! (one-call fuse, fused meshes and their quality), [`stages`] (cut and stitch as separate
+//! stages, the cut roots), plus [`status`], [`version`] and the [`boundary`] helpers.
 
 pub mod boundary;
 pub mod fuse;
 pub mod mesh;
 pub mod register;
 pub mod session;
+pub mod stages;
 pub mod status;
 pub mod version;
 
@@ -25,5 +27,6 @@ pub use fuse::*;
 pub use mesh::*;
 pub use register::*;
 pub use session::*;
+pub use stages::*;
 pub use status::*;
 pub use version::*;

@@ -2,8 +2,8 @@
 //! modalities, report the teeth present in only one, and merge everything into one mesh with
 //! per-vertex FDI labels and sources.
 
-use super::{CutTooth, FuseOptions, VertexSource, cut_tooth, stitch_tooth};
 use super::FusedTooth;
+use super::{CutTooth, FuseOptions, VertexSource, cut_tooth, stitch_tooth};
 use crate::mesh::{LabeledMesh, TriMesh, split_by_face_labels, split_by_vertex_labels};
 use crate::{Error, Result, Rigid};
 use std::collections::BTreeMap;
