@@ -3,7 +3,7 @@
 
 mod common;
 
-use toothfuse::fuse::{FuseOptions, Preset, VertexSource, fuse_tooth};
+use toothfuse::fuse::{FuseOptions, Preset, VertexSource, cut_tooth, fuse_tooth, stitch_tooth};
 use toothfuse::mesh_check::{SurfaceDistance, self_intersections};
 
 fn check(preset: Preset, seed: u64) {
@@ -77,4 +77,80 @@ fn default_preset_is_watertight_and_keeps_ios() {
 #[test]
 fn paper_preset_is_watertight_and_keeps_ios() {
     check(Preset::Paper, 1);
+}
+
+/// The two stages: `stitch_tooth(cut_tooth(..))` is `fuse_tooth` bit for bit, the cut carries
+/// everything the stitch needs (stitching one cut with the paper's stitch options equals
+/// `fuse_tooth` with default cut + paper stitch), stitching is repeatable, and the fused mesh is
+/// the cut's crown, then the band, then the cut's root, unchanged.
+#[test]
+fn cut_then_stitch_equals_fuse_tooth() {
+    let c = common::case(3, 0.1);
+    let opts = FuseOptions::default();
+    let fuse = |o: &FuseOptions| {
+        fuse_tooth(
+            11,
+            &c.crown,
+            &c.cbct,
+            &c.ios_to_output,
+            &c.cbct_to_output,
+            o,
+        )
+        .unwrap()
+    };
+    let cut = cut_tooth(
+        11,
+        &c.crown,
+        &c.cbct,
+        &c.ios_to_output,
+        &c.cbct_to_output,
+        &opts,
+    )
+    .unwrap();
+    let mut mixed = opts;
+    mixed.stitch = FuseOptions::preset(Preset::Paper).stitch;
+    for o in [opts, mixed] {
+        let staged = stitch_tooth(&cut, &o).unwrap();
+        let again = stitch_tooth(&cut, &o).unwrap();
+        let whole = fuse(&o);
+        for f in [&again, &whole] {
+            assert_eq!(staged.mesh.triangles, f.mesh.triangles);
+            let bits = |m: &toothfuse::TriMesh| {
+                m.positions
+                    .iter()
+                    .map(|p| p.to_array().map(f64::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&staged.mesh), bits(&f.mesh));
+            assert_eq!(staged.source, f.source);
+            assert_eq!(staged.ios_vertex, f.ios_vertex);
+            assert_eq!(staged.quality, f.quality);
+            assert_eq!(staged.warnings, f.warnings);
+        }
+        let nc = cut.crown().positions.len();
+        let root = &cut.root().root;
+        let nr = root.positions.len();
+        let n = staged.mesh.positions.len();
+        assert_eq!(&staged.mesh.positions[..nc], &cut.crown().positions[..]);
+        assert_eq!(&staged.mesh.positions[n - nr..], &root.positions[..]);
+        assert!(
+            staged.source[n - nr..]
+                .iter()
+                .all(|&s| s == VertexSource::Cbct as u8)
+        );
+        assert_eq!(&staged.ios_vertex[..nc], cut.ios_vertex());
+        let off = (n - nr) as u32;
+        let nt = staged.mesh.triangles.len();
+        let root_tris: Vec<[u32; 3]> = root.triangles.iter().map(|t| t.map(|v| v + off)).collect();
+        assert_eq!(
+            &staged.mesh.triangles[nt - root_tris.len()..],
+            &root_tris[..]
+        );
+        assert_eq!(staged.cut_ms, cut.cut_ms());
+    }
+    // Different stitch options do change the band (the options reach the stitch).
+    assert_ne!(
+        stitch_tooth(&cut, &opts).unwrap().mesh.positions.len(),
+        stitch_tooth(&cut, &mixed).unwrap().mesh.positions.len()
+    );
 }
