@@ -107,6 +107,55 @@ class FuseTest(unittest.TestCase):
                 self.assertTrue(tre <= 0.5 or rep["warnings"], f"tooth {fdi}: TRE {tre:.3f} mm")
                 self.assertGreater(rep["inlier_fraction"], 0.5)
 
+    def test_stages_register_cut_stitch(self):
+        (ixyz, itri, ip), (cxyz, ctri, cp) = self.ios, self.cbct
+        with toothfuse.Session() as s:
+            s.add_jaw(toothfuse.IOS, ixyz, itri, ip["label"])
+            s.add_jaw(toothfuse.CBCT, cxyz, ctri, cp["label"])
+            for stage in (s.cut, s.stitch, s.fuse_registered):
+                with self.assertRaises(toothfuse.ToothfuseError) as e:
+                    stage()  # not registered
+                self.assertEqual(e.exception.status, 10)  # WRONG_STATE
+            s.register()
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.stitch()  # registered, not cut
+            self.assertEqual(e.exception.status, 10)
+            self.assertIn("no cut", str(e.exception))
+            cut = s.cut()
+            self.assertGreaterEqual(len(cut), 3)
+            self.assertEqual(s.cut_teeth(), cut)
+            roots = {f: s.cut_root(f) for f in cut}
+            fused = s.stitch()
+            self.assertEqual(fused, cut)
+            staged = {f: s.fused_mesh(f) for f in fused}
+            # fuse_registered (cut + stitch in one call) gives the same meshes, bit for bit.
+            self.assertEqual(s.fuse_registered(), fused)
+            for f in fused:
+                self.assertEqual(s.fused_mesh(f), staged[f])
+            for f, (pos, idx, loop) in roots.items():
+                with self.subTest(tooth=f):
+                    tris = list(idx)
+                    e = ts.edge_report(tris)
+                    # An open manifold root whose boundary is exactly the cut loop, in order.
+                    self.assertEqual((e["non_manifold"], e["misoriented"]), (0, 0))
+                    self.assertEqual(e["boundary"], len(loop))
+                    self.assertEqual(len(set(loop)), len(loop))
+                    directed = {(t[k], t[(k + 1) % 3])
+                                for t in zip(tris[0::3], tris[1::3], tris[2::3])
+                                for k in range(3)}
+                    for a, b in zip(loop, list(loop[1:]) + [loop[0]]):
+                        self.assertIn((a, b), directed)
+                        self.assertNotIn((b, a), directed)
+                    # The fused tooth's CBCT vertices are the cut root's, bit for bit.
+                    fpos, _, src, _ = staged[f]
+                    cbct = [fpos[3 * v + k] for v in range(len(src))
+                            if src[v] == toothfuse.SOURCE_CBCT for k in range(3)]
+                    self.assertEqual(cbct, list(pos))
+            s.remove_tooth(toothfuse.IOS, fused[0])
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.cut_root(fused[1])  # the cut was dropped with the teeth change
+            self.assertEqual(e.exception.status, 10)
+
     def test_errors(self):
         (ixyz, itri, ip), (cxyz, ctri, cp) = self.ios, self.cbct
         one = [l if l == self.both[0] else 0 for l in cp["label"]]

@@ -153,6 +153,17 @@ _info = _fn("toothfuse_session_mesh_info", _st, _S, ctypes.c_uint32, ctypes.c_in
 _opts_default = _fn("toothfuse_options_default", _st, ctypes.POINTER(_Options))
 _register = _fn("toothfuse_session_register", _st, _S, ctypes.POINTER(_Options))
 _fuse = _fn("toothfuse_session_fuse", _st, _S, ctypes.POINTER(_Options))
+_fuse_registered = _fn("toothfuse_session_fuse_registered", _st, _S, ctypes.POINTER(_Options))
+_cut = _fn("toothfuse_session_cut", _st, _S, ctypes.POINTER(_Options))
+_stitch = _fn("toothfuse_session_stitch", _st, _S, ctypes.POINTER(_Options))
+_cut_teeth = _fn("toothfuse_session_cut_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
+_cut_size = _fn("toothfuse_session_cut_size", _st, _S, ctypes.c_int32, _size_p, _size_p, _size_p)
+_copy_cv = _fn("toothfuse_session_copy_cut_vertices", _st, _S, ctypes.c_int32, ctypes.c_void_p,
+               ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32)
+_copy_ci = _fn("toothfuse_session_copy_cut_indices", _st, _S, ctypes.c_int32, _u32_p,
+               ctypes.c_size_t)
+_copy_cl = _fn("toothfuse_session_copy_cut_loop", _st, _S, ctypes.c_int32, _u32_p,
+               ctypes.c_size_t)
 _registered = _fn("toothfuse_session_registered_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
 _fused_teeth = _fn("toothfuse_session_fused_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
 _transform = _fn("toothfuse_session_transform", _st, _S, ctypes.c_int32, ctypes.c_uint32,
@@ -359,6 +370,45 @@ class Session:
         Teeth whose fusion failed are listed by `skipped()`."""
         self._check(_fuse(self._h, ctypes.byref(_options(preset, frame))))
         return self._fdi_list(_fused_teeth)
+
+    def fuse_registered(self, preset="default"):
+        """Cut + stitch with the last registration (no new registration; the output frame is
+        the registration's; only the fusion settings of `preset` are used); returns the fused
+        FDI numbers."""
+        self._check(_fuse_registered(self._h, ctypes.byref(_options(preset, "cbct"))))
+        return self._fdi_list(_fused_teeth)
+
+    def cut(self, preset="default"):
+        """Crown removal with the last registration (the first fusion stage); returns the cut
+        FDI numbers. The cut is kept for `stitch` until the teeth change or a new register or
+        fuse; read it with `cut_root`."""
+        self._check(_cut(self._h, ctypes.byref(_options(preset, "cbct"))))
+        return self._fdi_list(_cut_teeth)
+
+    def stitch(self, preset="default"):
+        """Stitching of the held cut (the second fusion stage); returns the fused FDI numbers,
+        read with `fused_mesh`. Same meshes as `fuse_registered`, bit for bit."""
+        self._check(_stitch(self._h, ctypes.byref(_options(preset, "cbct"))))
+        return self._fdi_list(_fused_teeth)
+
+    def cut_teeth(self):
+        """FDI numbers of the cut teeth (after cut)."""
+        return self._fdi_list(_cut_teeth)
+
+    def cut_root(self, fdi, scalar="d"):
+        """The cut CBCT root of a tooth (output frame) as (positions array('d' or 'f'), indices
+        array('I'), cut loop array('I'): the root's one boundary loop, root vertex indices)."""
+        nv, ni, nl = ctypes.c_size_t(), ctypes.c_size_t(), ctypes.c_size_t()
+        self._check(_cut_size(self._h, fdi, ctypes.byref(nv), ctypes.byref(ni), ctypes.byref(nl)))
+        pos = array.array(scalar, bytes(3 * nv.value * array.array(scalar).itemsize))
+        kind = _FLOAT32 if scalar == "f" else _FLOAT64
+        idx = array.array("I", bytes(4 * ni.value))
+        loop = array.array("I", bytes(4 * nl.value))
+        self._check(_copy_cv(self._h, fdi, pos.buffer_info()[0], nv.value, 3 * pos.itemsize,
+                             kind))
+        self._check(_copy_ci(self._h, fdi, ctypes.cast(idx.buffer_info()[0], _u32_p), ni.value))
+        self._check(_copy_cl(self._h, fdi, ctypes.cast(loop.buffer_info()[0], _u32_p), nl.value))
+        return pos, idx, loop
 
     def _fdi_list(self, fn):
         out = (ctypes.c_int32 * 52)()
