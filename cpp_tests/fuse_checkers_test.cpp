@@ -3,7 +3,9 @@
 // manifold for VTK (vtkFeatureEdges: 0 boundary and 0 non-manifold edges; vtkMassProperties
 // volume > 0) and for OpenMesh (every face accepted by add_face, no boundary halfedge, no
 // non-manifold vertex, one component), and every IOS crown vertex must be in the fused tooth
-// (source IOS) at its position mapped by the tooth's IOS->output transform.
+// (source IOS) at its position mapped by the tooth's IOS->output transform. The two-stage path
+// (register -> cut -> stitch) gives the one-call fuse's meshes exactly, and each cut root is an
+// open surface whose one boundary loop is the reported cut loop, for VTK and OpenMesh.
 #include "register_fuse_support.hpp"
 
 #include <vtkCellArray.h>
@@ -12,6 +14,7 @@
 #include <vtkNew.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -42,27 +45,38 @@ Fused fused(tf::Session& s, int32_t fdi) {
   return f;
 }
 
-// VTK: 0 boundary and 0 non-manifold edges, positive volume.
-std::string vtk_check(const Fused& f) {
+vtkSmartPointer<vtkPolyData> polydata(const std::vector<double>& xyz,
+                                      const std::vector<uint32_t>& tris) {
   vtkNew<vtkPoints> pts;
   pts->SetDataTypeToDouble();
-  for (size_t i = 0; i < f.xyz.size() / 3; i++) pts->InsertNextPoint(&f.xyz[3 * i]);
+  for (size_t i = 0; i < xyz.size() / 3; i++) pts->InsertNextPoint(&xyz[3 * i]);
   vtkNew<vtkCellArray> polys;
-  for (size_t t = 0; t < f.tris.size() / 3; t++) {
-    vtkIdType ids[3] = {f.tris[3 * t], f.tris[3 * t + 1], f.tris[3 * t + 2]};
+  for (size_t t = 0; t < tris.size() / 3; t++) {
+    vtkIdType ids[3] = {tris[3 * t], tris[3 * t + 1], tris[3 * t + 2]};
     polys->InsertNextCell(3, ids);
   }
-  vtkNew<vtkPolyData> pd;
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
   pd->SetPoints(pts);
   pd->SetPolys(polys);
+  return pd;
+}
+
+// vtkFeatureEdges: the number of boundary (or non-manifold) edges of a surface.
+vtkIdType feature_edges(vtkPolyData* pd, bool boundary) {
   vtkNew<vtkFeatureEdges> fe;
   fe->SetInputData(pd);
-  fe->BoundaryEdgesOn();
-  fe->NonManifoldEdgesOn();
+  fe->SetBoundaryEdges(boundary);
+  fe->SetNonManifoldEdges(!boundary);
   fe->FeatureEdgesOff();
   fe->ManifoldEdgesOff();
   fe->Update();
-  vtkIdType bad = fe->GetOutput()->GetNumberOfCells();
+  return fe->GetOutput()->GetNumberOfCells();
+}
+
+// VTK: 0 boundary and 0 non-manifold edges, positive volume.
+std::string vtk_check(const Fused& f) {
+  auto pd = polydata(f.xyz, f.tris);
+  vtkIdType bad = feature_edges(pd, true) + feature_edges(pd, false);
   vtkNew<vtkMassProperties> mp;
   mp->SetInputData(pd);
   mp->Update();
@@ -189,6 +203,103 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
   // Every tooth present in both modalities fuses (measured: 219 of 219 with the chart band;
   // 3 lower incisors failed with the earlier loft band) and passes both checkers.
   EXPECT_EQ(failed, 0u) << "fusion failures";
+}
+
+// The cut root of tooth `fdi` (the cut stage's result) and its cut loop.
+struct CutRoot {
+  std::vector<double> xyz;
+  std::vector<uint32_t> tris;
+  std::vector<uint32_t> loop;
+};
+
+CutRoot cut_root(tf::Session& s, int32_t fdi) {
+  CutRoot r;
+  size_t nv = 0, ni = 0, nl = 0;
+  EXPECT_EQ(toothfuse_session_cut_size(s.get(), fdi, &nv, &ni, &nl), TOOTHFUSE_STATUS_OK);
+  r.xyz.resize(3 * nv);
+  r.tris.resize(ni);
+  r.loop.resize(nl);
+  EXPECT_EQ(toothfuse_session_copy_cut_vertices(s.get(), fdi, r.xyz.data(), nv,
+                                                3 * sizeof(double), TOOTHFUSE_SCALAR_FLOAT64),
+            TOOTHFUSE_STATUS_OK);
+  EXPECT_EQ(toothfuse_session_copy_cut_indices(s.get(), fdi, r.tris.data(), ni),
+            TOOTHFUSE_STATUS_OK);
+  EXPECT_EQ(toothfuse_session_copy_cut_loop(s.get(), fdi, r.loop.data(), nl),
+            TOOTHFUSE_STATUS_OK);
+  return r;
+}
+
+// register -> cut -> stitch through the C API gives the one-call fuse's meshes exactly (same
+// counts, same vertices, triangles and sources), and every cut root is open with one boundary
+// loop: vtkFeatureEdges' boundary edges = the cut loop's length, no non-manifold edge; OpenMesh
+// accepts every face, its boundary is one loop of that length through the cut loop's vertices.
+TEST(FuseCheckers, RegisterCutStitchEqualsOneCallFuse) {
+  const char* dir = std::getenv("TOOTHFUSE_JAWS_DIR");
+  ASSERT_NE(dir, nullptr) << "TOOTHFUSE_JAWS_DIR unset (the demo_jaws fixture sets it)";
+  std::string jd = std::string(dir) + "/jaw_2";  // seed 3, partial upper arch: small
+  tf::Session staged, one;
+  ASSERT_TRUE(tf::load_demo(staged, jd, false)) << jd;
+  ASSERT_TRUE(tf::load_demo(one, jd, false)) << jd;
+  EXPECT_EQ(toothfuse_session_stitch(staged.get(), nullptr), TOOTHFUSE_STATUS_WRONG_STATE);
+  ASSERT_EQ(toothfuse_session_register(staged.get(), nullptr), TOOTHFUSE_STATUS_OK)
+      << staged.error();
+  ASSERT_EQ(toothfuse_session_cut(staged.get(), nullptr), TOOTHFUSE_STATUS_OK) << staged.error();
+  int32_t cut[52];
+  size_t ncut = 0;
+  ASSERT_EQ(toothfuse_session_cut_teeth(staged.get(), cut, 52, &ncut), TOOTHFUSE_STATUS_OK);
+  ASSERT_GE(ncut, 3u);
+  for (size_t i = 0; i < ncut; i++) {
+    CutRoot r = cut_root(staged, cut[i]);
+    auto pd = polydata(r.xyz, r.tris);
+    EXPECT_EQ(feature_edges(pd, true), static_cast<vtkIdType>(r.loop.size()))
+        << "tooth " << cut[i] << ": VTK boundary edges vs cut loop";
+    EXPECT_EQ(feature_edges(pd, false), 0) << "tooth " << cut[i];
+    tf::MeshD m;
+    std::vector<tf::MeshD::VertexHandle> vh;
+    for (size_t v = 0; v < r.xyz.size() / 3; v++)
+      vh.push_back(m.add_vertex(tf::MeshD::Point(r.xyz[3 * v], r.xyz[3 * v + 1], r.xyz[3 * v + 2])));
+    size_t rejected = 0;
+    for (size_t t = 0; t < r.tris.size() / 3; t++)
+      if (!m.add_face(vh[r.tris[3 * t]], vh[r.tris[3 * t + 1]], vh[r.tris[3 * t + 2]]).is_valid())
+        rejected++;
+    EXPECT_EQ(rejected, 0u) << "tooth " << cut[i];
+    size_t boundary = 0;
+    for (auto h : m.halfedges())
+      if (m.is_boundary(h)) boundary++;
+    EXPECT_EQ(boundary, r.loop.size()) << "tooth " << cut[i] << ": one boundary loop";
+    // Walk OpenMesh's boundary from the loop's first vertex: it visits exactly the loop.
+    auto h0 = m.halfedge_handle(vh[r.loop[0]]);
+    ASSERT_TRUE(m.is_boundary(h0)) << "tooth " << cut[i];
+    std::vector<uint32_t> walk;
+    auto h = h0;
+    do {
+      walk.push_back(static_cast<uint32_t>(m.from_vertex_handle(h).idx()));
+      h = m.next_halfedge_handle(h);
+    } while (h != h0 && walk.size() <= r.loop.size());
+    std::vector<uint32_t> a = walk, b = r.loop;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    EXPECT_EQ(a, b) << "tooth " << cut[i] << ": boundary walk vs cut loop";
+  }
+  ASSERT_EQ(toothfuse_session_stitch(staged.get(), nullptr), TOOTHFUSE_STATUS_OK)
+      << staged.error();
+  ASSERT_EQ(toothfuse_session_fuse(one.get(), nullptr), TOOTHFUSE_STATUS_OK) << one.error();
+  int32_t a[52], b[52];
+  size_t na = 0, nb = 0;
+  ASSERT_EQ(toothfuse_session_fused_teeth(staged.get(), a, 52, &na), TOOTHFUSE_STATUS_OK);
+  ASSERT_EQ(toothfuse_session_fused_teeth(one.get(), b, 52, &nb), TOOTHFUSE_STATUS_OK);
+  ASSERT_EQ(std::vector<int32_t>(a, a + na), std::vector<int32_t>(b, b + nb));
+  ASSERT_EQ(std::vector<int32_t>(a, a + na), std::vector<int32_t>(cut, cut + ncut));
+  for (size_t i = 0; i < na; i++) {
+    Fused x = fused(staged, a[i]), y = fused(one, a[i]);
+    EXPECT_EQ(x.xyz.size(), y.xyz.size()) << "tooth " << a[i];
+    EXPECT_EQ(x.tris.size(), y.tris.size()) << "tooth " << a[i];
+    EXPECT_TRUE(x.xyz == y.xyz) << "tooth " << a[i] << ": vertices differ";
+    EXPECT_TRUE(x.tris == y.tris) << "tooth " << a[i] << ": triangles differ";
+    EXPECT_TRUE(x.source == y.source) << "tooth " << a[i] << ": sources differ";
+    std::string err = vtk_check(x) + openmesh_check(x);
+    EXPECT_TRUE(err.empty()) << "tooth " << a[i] << ": " << err;
+  }
 }
 
 }  // namespace

@@ -222,6 +222,33 @@ fn stages_give_the_one_call_fuse_bit_for_bit_and_open_one_loop_roots() {
             assert_eq!(m.2, st.2, "tooth {f}: sources");
         }
     }
+    // The report's timings come from the stages: no registration time, cut and stitch timed.
+    let mut len = 0usize;
+    // SAFETY: live session; size query then copy into a buffer of that size + 1.
+    let json = unsafe {
+        call(
+            &s,
+            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
+        );
+        let mut buf = vec![0 as std::ffi::c_char; len + 1];
+        call(
+            &s,
+            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
+        );
+        std::ffi::CStr::from_ptr(buf.as_ptr())
+            .to_str()
+            .unwrap()
+            .to_owned()
+    };
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let t = |k: &str| v["timing_ms"][k].as_f64().unwrap();
+    assert_eq!(t("register"), 0.0);
+    assert!(t("cut") > 0.0 && t("stitch") > 0.0, "{}", v["timing_ms"]);
+    // (to 1e-12 relative: the JSON reader may round the last bit)
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+    assert!(close(t("fuse"), t("cut") + t("stitch")), "{}", v["timing_ms"]);
+    assert!(close(t("total"), t("cut") + t("stitch")), "{}", v["timing_ms"]);
+    assert_eq!(v["teeth"].as_array().unwrap().len(), staged.len());
     // Stitching the same cut again gives the same meshes.
     // SAFETY: as above.
     unsafe { call(&s, toothfuse_session_stitch(s.0, ptr::null())) };
