@@ -186,7 +186,7 @@ fn stages_give_the_one_call_fuse_bit_for_bit_and_open_one_loop_roots() {
     let p = phantom(3);
     let s = Session::new();
     add_phantom(&s, &p);
-    // SAFETY (all calls below): live sessions, NULL options = defaults, valid out pointers.
+    // SAFETY: live sessions, NULL options = defaults, valid out pointers (also below).
     unsafe {
         call(&s, toothfuse_session_register(s.0, ptr::null()));
         call(&s, toothfuse_session_cut(s.0, ptr::null()));
@@ -246,8 +246,16 @@ fn stages_give_the_one_call_fuse_bit_for_bit_and_open_one_loop_roots() {
     assert!(t("cut") > 0.0 && t("stitch") > 0.0, "{}", v["timing_ms"]);
     // (to 1e-12 relative: the JSON reader may round the last bit)
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
-    assert!(close(t("fuse"), t("cut") + t("stitch")), "{}", v["timing_ms"]);
-    assert!(close(t("total"), t("cut") + t("stitch")), "{}", v["timing_ms"]);
+    assert!(
+        close(t("fuse"), t("cut") + t("stitch")),
+        "{}",
+        v["timing_ms"]
+    );
+    assert!(
+        close(t("total"), t("cut") + t("stitch")),
+        "{}",
+        v["timing_ms"]
+    );
     assert_eq!(v["teeth"].as_array().unwrap().len(), staged.len());
     // Stitching the same cut again gives the same meshes.
     // SAFETY: as above.
@@ -318,7 +326,7 @@ fn stage_order_and_dropped_cut_are_wrong_state() {
     let s = Session::new();
     add_phantom(&s, &p);
     let (mut nv, mut ni, mut nl) = (0usize, 0usize, 0usize);
-    // SAFETY (all calls below): live session or NULL (refused), valid or NULL out pointers as
+    // SAFETY: live session or NULL (refused), valid or NULL out pointers as
     // stated, buffers of the stated sizes.
     unsafe {
         assert_eq!(
