@@ -242,8 +242,10 @@ fn default_preset_strict_targets() {
 
 /// The default band (graded points in a flat chart of the tooth side, lifted as a graph) against
 /// the earlier one (rings on a Hermite loft between smoothed loops, no clean-up) on one jaw:
-/// far fewer intersecting face pairs that the fusion adds (pairs not both in the input crown) and
-/// far fewer slivers. Measured (seed 3, upper, full): see the printed line and the README.
+/// no more intersecting face pairs that the fusion adds (pairs not both in the input crown) and
+/// far fewer slivers. Measured (seed 3, upper, full): 2 and 2 added pairs, median band min angle
+/// 11.5° vs 5.5°. (With the earlier phantom, whose crowns folded at the margin, the rings added
+/// ten times more pairs; on clean crowns both bands add few.)
 #[test]
 fn chart_band_beats_loft_rings() {
     let p = match Phantom::generate(&PhantomOptions {
@@ -285,7 +287,7 @@ fn chart_band_beats_loft_rings() {
     let (si_rings, ang_rings) = measure(PointGeneration::Rings);
     let (si_chart, ang_chart) = measure(PointGeneration::Chart);
     assert!(
-        si_chart * 10 <= si_rings,
+        si_chart <= si_rings,
         "added intersections {si_rings} -> {si_chart}"
     );
     assert!(

@@ -3,11 +3,13 @@
 //! vertex (FDI, 0 = gingiva) with label bleed along the margin, interproximal notches where the
 //! scanner misses the contacts, optional small holes, and measurement noise.
 
+use super::crown_clean::untangle_crowns;
 use super::crown_topology::make_crowns_disks;
 use super::gingiva::{Gingiva, MarginPolar};
 use super::grid::Grid;
 use super::layout::PlacedTooth;
 use super::project::project;
+use super::relax::{FoldGuard, relax_on_surface};
 use super::rng::Rng;
 use super::surface_nets::{largest_component, surface_nets};
 use crate::mesh::TriMesh;
@@ -79,6 +81,23 @@ impl Field<'_> {
             }
         }
         (g, best.0, best.1)
+    }
+
+    /// The teeth whose bounding box is within `pad` of `p`.
+    fn teeth_near(&self, p: DVec3, pad: f64) -> Vec<usize> {
+        (0..self.boxes.len())
+            .filter(|&i| {
+                let (lo, hi) = self.boxes[i];
+                (lo - p).max(p - hi).max(DVec3::ZERO).length() <= pad
+            })
+            .collect()
+    }
+
+    /// The field near `p` where only the teeth `near` can be close (see [`Field::teeth_near`]).
+    fn eval_among(&self, p: DVec3, near: &[usize]) -> f64 {
+        near.iter()
+            .map(|&i| self.teeth[i].tooth.eval(p))
+            .fold(self.gum.eval(p), f64::min)
     }
 
     fn eval(&self, p: DVec3) -> f64 {
@@ -194,13 +213,31 @@ pub fn simulate(
             .collect(),
     );
     let mut mesh = largest_component(&cropped);
+    // A scanner spreads its vertices evenly: no surface-nets slivers.
+    let guard = FoldGuard::new(&mesh);
+    let near: Vec<Vec<usize>> = mesh
+        .positions
+        .iter()
+        .map(|&p| field.teeth_near(p, 2.0 * h))
+        .collect();
+    // Only near the teeth: the gingiva further away never becomes crown.
+    let movable: Vec<bool> = near.iter().map(|n| !n.is_empty()).collect();
+    relax_on_surface(
+        &mut mesh,
+        &guard,
+        &|v, p| field.eval_among(p, &near[v]),
+        &movable,
+        0.5 * h,
+        2,
+    );
     // Labels with bleed; crown vertices projected onto their tooth.
     let mut labels = vec![0i32; mesh.positions.len()];
-    for (v, p) in mesh.positions.iter_mut().enumerate() {
-        let (g, best, tv) = field.parts(*p);
+    for v in 0..mesh.positions.len() {
+        let p = mesh.positions[v];
+        let (g, best, tv) = field.parts(p);
         let Some(i) = best else { continue };
         let t = &teeth[i];
-        let l = t.tooth.to_local(*p);
+        let l = t.tooth.to_local(p);
         let phi = l.y.atan2(l.x);
         let (amp, a, b, off) = t.bleed;
         let bleed = amp * (0.6 * (2.0 * phi + a).sin() + 0.4 * (5.0 * phi + b).sin()) + off;
@@ -208,7 +245,7 @@ pub fn simulate(
             labels[v] = t.fdi as i32;
         }
         if tv < g {
-            *p = project(*p, &|q| t.tooth.eval(q), h);
+            guard.try_move(&mut mesh, v, project(p, &|q| t.tooth.eval(q), h));
         }
     }
     // Small holes in random crowns.
@@ -236,7 +273,6 @@ pub fn simulate(
         }
         labels = nl;
     }
-    make_crowns_disks(&mesh, &mut labels, realism.holes > 0);
     // Measurement noise.
     if realism.noise > 0.0 {
         for p in &mut mesh.positions {
@@ -247,6 +283,8 @@ pub fn simulate(
             ) * realism.noise;
         }
     }
+    make_crowns_disks(&mesh, &mut labels, realism.holes > 0);
+    untangle_crowns(&mesh, &mut labels, realism.holes > 0, 6);
     let margins = teeth
         .iter()
         .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))

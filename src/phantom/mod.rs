@@ -57,6 +57,7 @@
 //!   IOS 180k vertices.
 
 mod cbct;
+mod crown_clean;
 mod crown_topology;
 mod drift;
 mod generate;
@@ -66,6 +67,7 @@ mod ios;
 mod layout;
 mod project;
 mod real;
+mod relax;
 pub mod rng;
 mod shape;
 mod surface_nets;
