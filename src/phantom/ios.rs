@@ -232,7 +232,7 @@ pub fn simulate(
     );
     // Labels with bleed; crown vertices projected onto their tooth.
     let mut labels = vec![0i32; mesh.positions.len()];
-    for v in 0..mesh.positions.len() {
+    for (v, label) in labels.iter_mut().enumerate() {
         let p = mesh.positions[v];
         let (g, best, tv) = field.parts(p);
         let Some(i) = best else { continue };
@@ -242,7 +242,7 @@ pub fn simulate(
         let (amp, a, b, off) = t.bleed;
         let bleed = amp * (0.6 * (2.0 * phi + a).sin() + 0.4 * (5.0 * phi + b).sin()) + off;
         if tv <= g + bleed && tv < 1.0 {
-            labels[v] = t.fdi as i32;
+            *label = t.fdi as i32;
         }
         if tv < g {
             guard.try_move(&mut mesh, v, project(p, &|q| t.tooth.eval(q), h));
