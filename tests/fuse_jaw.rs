@@ -20,6 +20,8 @@ struct Accuracy {
     /// Largest deviation of the loop vertices (IOS margin, CBCT cut) the band is pinned to.
     loop_max: f64,
     self_intersections: usize,
+    /// Intersecting pairs the fusion added (not both faces from the input crown).
+    added_intersections: usize,
 }
 
 fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accuracy, f64)> {
@@ -164,6 +166,7 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
             band_max,
             loop_max,
             self_intersections: q.self_intersections.unwrap_or(0),
+            added_intersections: added_intersections(f),
         };
         println!(
             "{tag}: tooth {fdi}: crown mean {:.4} mm (CBCT-only {:.4}), band max {:.3} mm (loops {:.3}), band min angle {:.1}°, intersecting pairs {}, metal {}",
@@ -180,12 +183,24 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
     out
 }
 
-/// What holds on the phantom (measured): crown accuracy, and a band no farther from the truth
+/// What holds on the phantom (measured): crown accuracy; few intersecting face pairs added by the
+/// fusion (over the 219 teeth of the 20 eval jaws: none on 204, at most 9 on the others, where
+/// band faces meet crown faces at the margin; at most 17 on this test's jaws); and a band no farther from the truth
 /// than the loops it is pinned to (the CBCT cut loop carries the CBCT error, the IOS margin the
 /// gingiva that the labels bleed onto) plus 0.4 mm (measured over 219 teeth: excess median
 /// 0.003 mm, p95 0.13 mm, max 0.36 mm on lower incisors with folded margins).
 fn assert_accuracy(results: &[(u8, Accuracy, f64)]) {
+    let with_added = results
+        .iter()
+        .filter(|(_, a, _)| a.added_intersections > 0)
+        .count();
+    assert!(
+        with_added * 5 <= results.len(),
+        "{with_added} of {} teeth with added intersections",
+        results.len()
+    );
     for (fdi, a, _) in results {
+        assert!(a.added_intersections <= 30, "tooth {fdi}: {a:?}");
         assert!(a.fused_crown_mean <= 0.03, "tooth {fdi}: {a:?}");
         assert!(
             a.cbct_crown_mean >= 3.0 * a.fused_crown_mean,
@@ -231,8 +246,21 @@ fn paper_preset_is_watertight_too() {
     }
 }
 
+/// Where the chart band's lift folds over (a lower incisor whose deep interproximal notches put
+/// the margin inside the reference curve's radius of curvature: tooth 32 of this jaw, 119
+/// intersecting pairs before), the loft band is built too and the one whose faces cross each
+/// other less is kept: no added intersections on any tooth of the jaw.
 #[test]
-#[ignore = "known failing on the phantom: the IOS crowns themselves self-intersect, band faces at folded margins still cross crown faces on ~1 tooth in 3, band min angle < 5° on ~2 teeth in 5, and the loops the band is pinned to deviate 0.2-0.4 mm from the truth"]
+fn folded_chart_band_falls_back_to_the_loft() {
+    let r = run(17, Jaw::Lower, Variant::MissingTeeth, Preset::Default);
+    assert!(r.iter().any(|(fdi, _, _)| *fdi == 32), "tooth 32 fused");
+    for (fdi, a, _) in &r {
+        assert_eq!(a.added_intersections, 0, "tooth {fdi}: {a:?}");
+    }
+}
+
+#[test]
+#[ignore = "known failing on the phantom: band faces still cross crown faces at the margin on 15 of 219 teeth (2-9 pairs), band min angle < 5° on 18 of 219 (tiny IOS margin edges), and the loops the band is pinned to deviate 0.2-0.4 mm from the truth"]
 fn default_preset_strict_targets() {
     for jaw in [Jaw::Upper, Jaw::Lower] {
         let r = run(3, jaw, Variant::Full, Preset::Default);

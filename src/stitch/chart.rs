@@ -313,6 +313,11 @@ impl Lift {
             + (t3 - t2) * mu
     }
 
+    /// The outward unit normal (horizontal) of the reference curve at chart `x`.
+    pub fn outward(&self, x: f64) -> DVec3 {
+        self.curve.at(x).1
+    }
+
     /// The 3D point at chart `c` and offset `r`.
     pub fn point(&self, c: [f64; 2], r: f64) -> DVec3 {
         let (base, nrm) = self.curve.at(c[0]);

@@ -21,6 +21,13 @@ pub(super) struct OrderedLoops<'a> {
     pub lo_dirs: &'a [DVec3],
 }
 
+/// The chart band and how many of its faces fold over.
+pub(super) struct ChartBand {
+    pub band: Band,
+    /// Faces the lift folded over (see [`folded_faces`]).
+    pub folded: usize,
+}
+
 /// Builds the chart band; an error means the loops do not project to a simple annulus in the
 /// chart (the caller falls back to the loft rings).
 pub(super) fn chart_band(
@@ -28,7 +35,7 @@ pub(super) fn chart_band(
     frame: &ToothFrame,
     opts: &StitchOptions,
     o: &OrderedLoops,
-) -> Result<Band> {
+) -> Result<ChartBand> {
     let up_s = smooth(o.up_pts, 8);
     let up_d = smooth_dirs(o.up_dirs, 8);
     let lo_s = smooth(o.lo_pts, 4);
@@ -153,7 +160,47 @@ pub(super) fn chart_band(
             band.points[i] = lift.point(c, lift.profile_offset(c) + values[nu + nl + i]);
         }
     }
-    Ok(band)
+    let folded = folded_faces(&band, loops, &tris, &chart, &lift);
+    Ok(ChartBand { band, folded })
+}
+
+/// Band faces whose lifted normal points to the other side of the reference curve than most
+/// faces' do, each judged at the outward normal where its chart centroid lies: where the lift
+/// folded the band over.
+fn folded_faces(
+    band: &Band,
+    loops: &BandLoops,
+    tris: &[[u32; 3]],
+    chart: &[[f64; 2]],
+    lift: &Lift,
+) -> usize {
+    let (nu, nl) = (loops.upper.len(), loops.lower.len());
+    let period = lift.period();
+    let pos = |i: u32| {
+        let i = i as usize;
+        if i < nu {
+            loops.upper[i]
+        } else if i < nu + nl {
+            loops.lower[i - nu]
+        } else {
+            band.points[i - nu - nl]
+        }
+    };
+    let (mut plus, mut minus) = (0usize, 0usize);
+    for t in tris {
+        let [a, b, c] = t.map(pos);
+        let x0 = chart[t[0] as usize][0];
+        let xm = x0
+            + (wrap(chart[t[1] as usize][0] - x0, period)
+                + wrap(chart[t[2] as usize][0] - x0, period))
+                / 3.0;
+        if (b - a).cross(c - a).dot(lift.outward(xm)) > 0.0 {
+            plus += 1;
+        } else {
+            minus += 1;
+        }
+    }
+    plus.min(minus)
 }
 
 /// Makes the chart `x` of a closed loop (unwrapped, running once over `period`) strictly

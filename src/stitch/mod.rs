@@ -138,20 +138,92 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             up_dirs: &up_dirs,
             lo_dirs: &lo_dirs,
         };
-        // Where the loops do not chart as one simple annulus: the loft rings below.
-        if let Ok(b) = chart_band::chart_band(loops, frame, opts, &ordered) {
-            return Ok(b);
+        // Where the loops do not chart as one simple annulus: the loft rings below. Where the
+        // chart's lift folds the band over (an inward offset beyond the reference curve's
+        // radius of curvature: deep interproximal notches of narrow incisors), the loft rings
+        // too, and the band with fewer folded faces is kept.
+        let loft = || {
+            loft_band(
+                loops,
+                frame,
+                opts,
+                [&uo, &lo],
+                [&up_pts, &lo_pts],
+                [&up_dirs, &lo_dirs],
+            )
+        };
+        let Ok(chart) = chart_band::chart_band(loops, frame, opts, &ordered) else {
+            return loft();
+        };
+        if chart.folded == 0 {
+            return Ok(chart.band);
         }
+        return Ok(match loft() {
+            Ok(b)
+                if band_self_intersections(&b, loops)
+                    < band_self_intersections(&chart.band, loops) =>
+            {
+                b
+            }
+            _ => chart.band,
+        });
     }
+    loft_band(
+        loops,
+        frame,
+        opts,
+        [&uo, &lo],
+        [&up_pts, &lo_pts],
+        [&up_dirs, &lo_dirs],
+    )
+}
+
+/// Pairs of band faces that intersect each other (exact test): how badly a band folds over.
+fn band_self_intersections(band: &Band, loops: &BandLoops) -> usize {
+    let (nu, nl) = (loops.upper.len() as u32, loops.lower.len() as u32);
+    let positions: Vec<DVec3> = loops
+        .upper
+        .iter()
+        .chain(loops.lower)
+        .chain(&band.points)
+        .copied()
+        .collect();
+    let index = |b: BandVertex| match b {
+        BandVertex::Upper(i) => i,
+        BandVertex::Lower(i) => nu + i,
+        BandVertex::Interior(i) => nu + nl + i,
+    };
+    let mesh = crate::mesh::TriMesh::new(
+        positions,
+        band.triangles.iter().map(|t| t.map(index)).collect(),
+    );
+    crate::mesh_check::self_intersections(&mesh).len()
+}
+
+/// The loft band: points on rings (or the paper's recursive interpolation) on a Hermite loft
+/// between the smoothed loops, triangulated in a cylindrical plane. `order` = the loops' caller
+/// indices counter-clockwise, `pts`/`dirs` the loops in that order.
+fn loft_band(
+    loops: &BandLoops,
+    frame: &ToothFrame,
+    opts: &StitchOptions,
+    order: [&[u32]; 2],
+    pts: [&[DVec3]; 2],
+    dirs: [&[DVec3]; 2],
+) -> Result<Band> {
+    let (nu, nl) = (loops.upper.len(), loops.lower.len());
+    let [uo, lo] = order;
+    let [up_pts, lo_pts] = pts;
+    let [up_dirs, lo_dirs] = dirs;
     // The loft (where our interior points live) runs between smoothed copies of the loops, so the
     // loops' vertex-level jaggedness does not leak into the interior.
-    let upper = LoopParam::upper(smooth(&up_pts, 8), smooth_dirs(&up_dirs, 8))?;
+    let upper = LoopParam::upper(smooth(up_pts, 8), smooth_dirs(up_dirs, 8))?;
     let lower =
-        LoopParam::lower_aligned(smooth(&lo_pts, 4), smooth_dirs(&lo_dirs, 4), &upper, frame)?;
+        LoopParam::lower_aligned(smooth(lo_pts, 4), smooth_dirs(lo_dirs, 4), &upper, frame)?;
     let loft = Loft::new(upper, lower, opts.tangent_scale);
     let (interior, spacing): (Vec<ParamPoint>, Box<dyn Fn(f64) -> f64>) = match opts.points {
         PointGeneration::Rings | PointGeneration::Chart => {
-            let (e_u, e_l) = (mean_edge(&up_pts), mean_edge(&lo_pts));
+            let (e_u, e_l) = (mean_edge(up_pts), mean_edge(lo_pts));
             (
                 rings(&loft, e_u, e_l),
                 Box::new(move |v: f64| e_l + (e_u - e_l) * v),
@@ -160,7 +232,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         PointGeneration::Recursive(io) => {
             let vox = io.voxel;
             (
-                recursive(&loft, &up_pts, &lo_pts, &io),
+                recursive(&loft, up_pts, lo_pts, &io),
                 Box::new(move |_| vox),
             )
         }
@@ -192,15 +264,15 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             (xy, p.pos, d)
         })
         .collect();
-    match triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops) {
+    match triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops) {
         Ok((b, _)) => Ok(b),
         Err(first) => {
             // Fallback when a loop folds back around the axis (the cylindrical projection is not
             // simple): loops on concentric circles by their turn parameter, interior points by
             // theirs. Always a valid annulus; the quality report checks the 3D result.
-            let up_raw = LoopParam::upper(up_pts.clone(), vec![DVec3::Z; nu])?;
+            let up_raw = LoopParam::upper(up_pts.to_vec(), vec![DVec3::Z; nu])?;
             let lo_raw =
-                LoopParam::lower_aligned(lo_pts.clone(), vec![DVec3::Z; nl], &up_raw, frame)?;
+                LoopParam::lower_aligned(lo_pts.to_vec(), vec![DVec3::Z; nl], &up_raw, frame)?;
             let up_xy: Vec<[f64; 2]> = up_raw.phi.iter().map(|&f| loft.plane(f, 1.0)).collect();
             let lo_xy: Vec<[f64; 2]> = lo_raw.phi.iter().map(|&f| loft.plane(f, 0.0)).collect();
             let inner: Vec<([f64; 2], DVec3, f64)> = interior
@@ -211,7 +283,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
                     (xy, p.pos, 0.4 * spacing(p.v) * rho / r_mean)
                 })
                 .collect();
-            triangulate(&up_xy, &lo_xy, &uo, &lo, &inner, loops)
+            triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops)
                 .map(|(b, _)| b)
                 .map_err(|e| Error::InvalidArgument(format!("{first}; annulus fallback: {e}")))
         }
