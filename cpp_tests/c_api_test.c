@@ -170,6 +170,19 @@ int main(void) {
     CHECK(strstr(toothfuse_session_last_error(session), "label 99 (on face 2)") != NULL);
   }
 
+  /* The fusion stages from C: no registration yet, so no cut; no cut, so no stitch. */
+  {
+    size_t nv = 0, ni = 0, nl = 0;
+    CHECK(toothfuse_session_cut(NULL, NULL) == TOOTHFUSE_STATUS_NULL_PARAMETER);
+    CHECK(toothfuse_session_stitch(NULL, NULL) == TOOTHFUSE_STATUS_NULL_PARAMETER);
+    CHECK_STATUS(toothfuse_session_cut(session, NULL), TOOTHFUSE_STATUS_WRONG_STATE);
+    CHECK(strstr(toothfuse_session_last_error(session), "registration") != NULL);
+    CHECK_STATUS(toothfuse_session_stitch(session, NULL), TOOTHFUSE_STATUS_WRONG_STATE);
+    CHECK(strstr(toothfuse_session_last_error(session), "cut") != NULL);
+    CHECK_STATUS(toothfuse_session_cut_size(session, 21, &nv, &ni, &nl),
+                 TOOTHFUSE_STATUS_WRONG_STATE);
+  }
+
   toothfuse_session_free(session);
   if (failures != 0) {
     fprintf(stderr, "%d check(s) failed\n", failures);
