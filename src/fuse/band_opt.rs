@@ -9,7 +9,7 @@ use super::quality::triangle_angles;
 use crate::mesh::TriMesh;
 use crate::mesh_check;
 use glam::DVec3;
-use std::collections::BTreeMap;
+use std::collections::HashMap;
 
 /// Smallest angle (degrees) of a triangle given by corner positions.
 fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
@@ -27,11 +27,29 @@ fn key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
+/// The faces of an edge: the first two, and how many there are.
+#[derive(Clone, Copy, Default)]
+struct EdgeFaces {
+    faces: [usize; 2],
+    count: usize,
+}
+
+impl EdgeFaces {
+    fn push(&mut self, f: usize) {
+        if self.count < 2 {
+            self.faces[self.count] = f;
+        }
+        self.count += 1;
+    }
+}
+
 /// One pass of min-angle-raising flips of edges shared by two band faces. `faces` must hold
 /// every face that can hold an edge between two band vertices (the band faces and every face
 /// touching a loop vertex): a flip must not create an edge that exists. Returns the flips made.
 fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) -> usize {
-    let mut edges: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    // Edge → its faces in `faces` order (the first two, and how many). A hash map for lookups
+    // only: the edges are visited in sorted order, so the result does not depend on hashing.
+    let mut edges: HashMap<(u32, u32), EdgeFaces> = HashMap::with_capacity(faces.len() * 2);
     for &f in faces {
         let t = mesh.triangles[f];
         for k in 0..3 {
@@ -40,13 +58,15 @@ fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) 
     }
     let in_band = |f: usize| band.contains(&f);
     let mut flips = 0;
-    let keys: Vec<(u32, u32)> = edges.keys().copied().collect();
+    let mut keys: Vec<(u32, u32)> = edges.keys().copied().collect();
+    keys.sort_unstable();
     for e in keys {
-        let fs = match edges.get(&e) {
-            Some(fs) if fs.len() == 2 && in_band(fs[0]) && in_band(fs[1]) => fs.clone(),
+        let (f, g) = match edges.get(&e) {
+            Some(fs) if fs.count == 2 && in_band(fs.faces[0]) && in_band(fs.faces[1]) => {
+                (fs.faces[0], fs.faces[1])
+            }
             _ => continue,
         };
-        let (f, g) = (fs[0], fs[1]);
         let (tf, tg) = (mesh.triangles[f], mesh.triangles[g]);
         // Rotate so tf = (a, b, c) with directed edge a→b the shared edge; tg has b→a.
         let Some(kf) = (0..3).find(|&k| key(tf[k], tf[(k + 1) % 3]) == e) else {
@@ -82,10 +102,16 @@ fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) 
         mesh.triangles[g] = n2;
         // Update the edge map for the four outer edges and the swapped diagonal.
         edges.remove(&e);
-        edges.insert(key(c, d), vec![f, g]);
+        edges.insert(
+            key(c, d),
+            EdgeFaces {
+                faces: [f, g],
+                count: 2,
+            },
+        );
         for (x, y, from, to) in [(b, c, f, g), (a, d, g, f)] {
             if let Some(v) = edges.get_mut(&key(x, y)) {
-                for h in v.iter_mut() {
+                for h in v.faces.iter_mut().take(v.count.min(2)) {
                     if *h == from {
                         *h = to;
                     }

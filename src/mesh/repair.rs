@@ -218,13 +218,29 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
         }
     }
     keyed.sort_unstable();
-    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); nf];
+    // Face → neighbour faces across shared edges, in sorted-edge order (CSR: no small vectors).
+    let mut start = vec![0usize; nf + 1];
     for w in keyed.windows(2) {
         if w[0].0 == w[1].0 {
-            nbrs[w[0].1 as usize].push(w[1].1);
-            nbrs[w[1].1 as usize].push(w[0].1);
+            start[w[0].1 as usize + 1] += 1;
+            start[w[1].1 as usize + 1] += 1;
         }
     }
+    for f in 0..nf {
+        start[f + 1] += start[f];
+    }
+    let mut fill = start.clone();
+    let mut adjacent = vec![0u32; start[nf]];
+    for w in keyed.windows(2) {
+        if w[0].0 == w[1].0 {
+            let (f, g) = (w[0].1 as usize, w[1].1 as usize);
+            adjacent[fill[f]] = w[1].1;
+            fill[f] += 1;
+            adjacent[fill[g]] = w[0].1;
+            fill[g] += 1;
+        }
+    }
+    let nbrs = |f: usize| &adjacent[start[f]..start[f + 1]];
     let has_directed =
         |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
     let mut state = vec![0u8; nf]; // 0 unvisited, 1 kept, 2 flipped
@@ -239,7 +255,7 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
         let mut comp = vec![seed];
         while let Some(f) = queue.pop_front() {
             let tf = m.triangles[f];
-            for &g in &nbrs[f] {
+            for &g in nbrs(f) {
                 let g = g as usize;
                 let tg = m.triangles[g];
                 // Shared edge a→b in f; consistent when g has b→a.
