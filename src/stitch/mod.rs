@@ -129,6 +129,16 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
     let pick = |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
     let (up_pts, lo_pts) = (pick(loops.upper, &uo), pick(loops.lower, &lo));
     let (up_dirs, lo_dirs) = (pick(loops.upper_dir, &uo), pick(loops.lower_dir, &lo));
+    let loft = || {
+        loft_band(
+            loops,
+            frame,
+            opts,
+            [&uo, &lo],
+            [&up_pts, &lo_pts],
+            [&up_dirs, &lo_dirs],
+        )
+    };
     if opts.points == PointGeneration::Chart {
         let ordered = chart_band::OrderedLoops {
             uo: &uo,
@@ -138,20 +148,10 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             up_dirs: &up_dirs,
             lo_dirs: &lo_dirs,
         };
-        // Where the loops do not chart as one simple annulus: the loft rings below. Where the
-        // chart's lift folds the band over (an inward offset beyond the reference curve's
-        // radius of curvature: deep interproximal notches of narrow incisors), the loft rings
-        // too, and the band with fewer folded faces is kept.
-        let loft = || {
-            loft_band(
-                loops,
-                frame,
-                opts,
-                [&uo, &lo],
-                [&up_pts, &lo_pts],
-                [&up_dirs, &lo_dirs],
-            )
-        };
+        // Where the loops do not chart as one simple annulus: the loft rings. Where the chart's
+        // lift folds the band over (an inward offset beyond the reference curve's radius of
+        // curvature: deep interproximal notches of narrow incisors), the loft rings too, and
+        // the band whose faces cross each other less is kept (the chart band on a tie).
         let Ok(chart) = chart_band::chart_band(loops, frame, opts, &ordered) else {
             return loft();
         };
@@ -168,14 +168,7 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             _ => chart.band,
         });
     }
-    loft_band(
-        loops,
-        frame,
-        opts,
-        [&uo, &lo],
-        [&up_pts, &lo_pts],
-        [&up_dirs, &lo_dirs],
-    )
+    loft()
 }
 
 /// Pairs of band faces that intersect each other (exact test): how badly a band folds over.
