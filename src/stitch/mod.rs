@@ -347,10 +347,14 @@ fn triangulate(
         if !pos.is_finite() {
             continue;
         }
-        // Strictly inside the annulus, and not closer to a loop than `min_d`.
-        let (in_u, d_u) = polygon_side(up_xy, xy);
-        let (in_l, d_l) = polygon_side(lo_xy, xy);
-        if !in_u || in_l || d_u < min_d || d_l < min_d {
+        // Strictly inside the annulus, and not closer to a loop than `min_d` (distances only
+        // when asked for: the chart's points come with none).
+        if !polygon_contains(up_xy, xy) || polygon_contains(lo_xy, xy) {
+            continue;
+        }
+        if min_d > 0.0
+            && (polygon_distance(up_xy, xy) < min_d || polygon_distance(lo_xy, xy) < min_d)
+        {
             continue;
         }
         if cdt_insert(
@@ -394,7 +398,7 @@ fn triangulate(
                 let (qa, qb) = (va.position(), vb.position());
                 let mid = [0.5 * (qa.x + qb.x), 0.5 * (qa.y + qb.y)];
                 // Only band edges matter: an edge outside the annulus is no band edge.
-                if !polygon_side(up_xy, mid).0 || polygon_side(lo_xy, mid).0 {
+                if !polygon_contains(up_xy, mid) || polygon_contains(lo_xy, mid) {
                     continue;
                 }
                 if cdt_insert(
@@ -604,11 +608,10 @@ fn smooth_dirs(d: &[DVec3], iters: usize) -> Vec<DVec3> {
         .collect()
 }
 
-/// Whether `q` is inside the closed polygon `poly` (even-odd), and its distance to the polygon.
-fn polygon_side(poly: &[[f64; 2]], q: [f64; 2]) -> (bool, f64) {
+/// Whether `q` is inside the closed polygon `poly` (even-odd).
+fn polygon_contains(poly: &[[f64; 2]], q: [f64; 2]) -> bool {
     let n = poly.len();
     let mut inside = false;
-    let mut best = f64::INFINITY;
     for i in 0..n {
         let a = poly[i];
         let b = poly[(i + 1) % n];
@@ -618,6 +621,17 @@ fn polygon_side(poly: &[[f64; 2]], q: [f64; 2]) -> (bool, f64) {
                 inside = !inside;
             }
         }
+    }
+    inside
+}
+
+/// Distance from `q` to the closed polygon `poly`.
+fn polygon_distance(poly: &[[f64; 2]], q: [f64; 2]) -> f64 {
+    let n = poly.len();
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
         let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
         let l2 = ex * ex + ey * ey;
         let t = if l2 > 0.0 {
@@ -628,7 +642,7 @@ fn polygon_side(poly: &[[f64; 2]], q: [f64; 2]) -> (bool, f64) {
         let (dx, dy) = (a[0] + t * ex - q[0], a[1] + t * ey - q[1]);
         best = best.min((dx * dx + dy * dy).sqrt());
     }
-    (inside, best)
+    best
 }
 
 /// Inserts a plane point; `None` if it coincides with an existing vertex.
