@@ -1,7 +1,10 @@
 //! IOS simulation: the visible surface of the drifted crowns and the gingiva, meshed as one
-//! surface by surface nets at the scanner's resolution, cropped to an open jaw, labeled per
+//! surface by surface nets at the scanner's resolution (vertices then spread evenly on the surface,
+//! see [`super::relax`]), cropped to an open jaw, labeled per
 //! vertex (FDI, 0 = gingiva) with label bleed along the margin, interproximal notches where the
-//! scanner misses the contacts, optional small holes, and measurement noise.
+//! scanner misses the contacts, optional small holes, and measurement noise; crowns that still
+//! cross themselves after the noise lose the faces at fault to the gingiva
+//! ([`super::crown_clean`]).
 
 use super::crown_clean::untangle_crowns;
 use super::crown_topology::make_crowns_disks;
