@@ -165,6 +165,33 @@ pub unsafe fn slice_out<'a, T>(ptr: *mut T, len: usize, name: &str) -> FfiResult
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
 }
 
+/// Copies `values` into a caller's output array `out` (parameter `name`, room for `capacity`);
+/// BUFFER_TOO_SMALL (nothing written) when it is short, as "`subject`: n `what` to copy but the
+/// buffer has room for `capacity`".
+///
+/// # Safety
+/// As [`slice_out`] for `values.len()` values when `capacity >= values.len()`.
+pub unsafe fn copy_out<T: Copy>(
+    values: &[T],
+    out: *mut T,
+    capacity: usize,
+    name: &str,
+    subject: &str,
+    what: &str,
+) -> FfiResult {
+    let n = values.len();
+    if capacity < n {
+        return Err(Failure::new(
+            toothfuse_status::BufferTooSmall,
+            format!("{subject}: {n} {what} to copy but the buffer has room for {capacity}"),
+        ));
+    }
+    // SAFETY: the caller guarantees room for `capacity >= n` values.
+    let dst = unsafe { slice_out(out, n, name) }?;
+    dst.copy_from_slice(values);
+    Ok(())
+}
+
 /// Checks an output pointer for one `T` (non-NULL, aligned) without writing it.
 pub fn check_out<T>(ptr: *mut T, name: &str) -> FfiResult<()> {
     if ptr.is_null() {

@@ -3,7 +3,7 @@
 //! the per-tooth quality report. `fdi` 0 selects the whole fused jaw (all fused teeth in one
 //! mesh) wherever a fused mesh is asked for.
 
-use super::boundary::{Failure, FfiResult, check_out, ffi_panic_boundary, slice_out, write_out};
+use super::boundary::{Failure, FfiResult, check_out, copy_out, ffi_panic_boundary, write_out};
 use super::mesh::{toothfuse_scalar, write_vertices};
 use super::register::{copy_fdis, toothfuse_options, with_options};
 use super::session::{toothfuse_session, with_session};
@@ -142,13 +142,6 @@ fn fused_tooth(s: &Session, fdi: i32) -> FfiResult<&FusedTooth> {
     })
 }
 
-fn too_small(what: &str, need: usize, capacity: usize, fdi: i32) -> Failure {
-    Failure::new(
-        toothfuse_status::BufferTooSmall,
-        format!("fused mesh {fdi}: {need} {what} to copy but the buffer has room for {capacity}"),
-    )
-}
-
 /// Writes the vertex count and the index count (3 per triangle) of fused mesh `fdi` (0 = whole
 /// jaw). WRONG_STATE before a fuse; MISSING_DATA for a tooth that was not fused.
 ///
@@ -274,16 +267,10 @@ pub unsafe extern "C" fn toothfuse_session_copy_fused_indices(
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
             let m = fused_mesh(s, fdi)?;
-            let n = 3 * m.mesh.triangles.len();
-            if index_capacity < n {
-                return Err(too_small("indices", n, index_capacity, fdi));
-            }
-            // SAFETY: the caller guarantees room for `index_capacity >= n` values.
-            let out = unsafe { slice_out(indices_out, n, "indices_out") }?;
-            for (o, t) in out.chunks_exact_mut(3).zip(&m.mesh.triangles) {
-                o.copy_from_slice(t);
-            }
-            Ok(())
+            let subject = format!("fused mesh {fdi}");
+            let tris = m.mesh.triangles.as_flattened();
+            // SAFETY: forwarded contract on `indices_out`.
+            unsafe { copy_out(tris, indices_out, index_capacity, "indices_out", &subject, "indices") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }
@@ -305,14 +292,9 @@ pub unsafe extern "C" fn toothfuse_session_copy_fused_sources(
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
             let m = fused_mesh(s, fdi)?;
-            let n = m.source.len();
-            if capacity < n {
-                return Err(too_small("sources", n, capacity, fdi));
-            }
-            // SAFETY: the caller guarantees room for `capacity >= n` bytes.
-            let out = unsafe { slice_out(source_out, n, "source_out") }?;
-            out.copy_from_slice(m.source);
-            Ok(())
+            let subject = format!("fused mesh {fdi}");
+            // SAFETY: forwarded contract on `source_out`.
+            unsafe { copy_out(m.source, source_out, capacity, "source_out", &subject, "sources") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }
@@ -334,14 +316,8 @@ pub unsafe extern "C" fn toothfuse_session_copy_fused_labels(
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
             let labels = &s.fused()?.result.jaw.labels;
-            let n = labels.len();
-            if capacity < n {
-                return Err(too_small("labels", n, capacity, 0));
-            }
-            // SAFETY: the caller guarantees room for `capacity >= n` values.
-            let out = unsafe { slice_out(labels_out, n, "labels_out") }?;
-            out.copy_from_slice(labels);
-            Ok(())
+            // SAFETY: forwarded contract on `labels_out`.
+            unsafe { copy_out(labels, labels_out, capacity, "labels_out", "fused mesh 0", "labels") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

@@ -1,7 +1,9 @@
 //! Reading a held tooth mesh back: sizes, a borrowed view, copy-out (double or float, strided),
 //! the map to the caller's input vertices, and topology facts.
 
-use super::boundary::{Failure, FfiResult, check_out, ffi_panic_boundary, slice_out, write_out};
+use super::boundary::{
+    Failure, FfiResult, check_out, copy_out, ffi_panic_boundary, slice_out, write_out,
+};
 use super::session::{decode_modality, toothfuse_modality, toothfuse_session, with_session};
 use super::status::toothfuse_status;
 use crate::mesh::{Scalar, VertexBuffer};
@@ -153,13 +155,6 @@ fn find(s: &Session, modality: toothfuse_modality, fdi: i32) -> FfiResult<&Tooth
     Ok(s.tooth(m, fdi)?)
 }
 
-fn too_small(what: &str, need: usize, capacity: usize, fdi: i32) -> Failure {
-    Failure::new(
-        toothfuse_status::BufferTooSmall,
-        format!("tooth {fdi}: {need} {what} to copy but the buffer has room for {capacity}"),
-    )
-}
-
 /// Writes the vertex count and the index count (3 per triangle) of tooth `fdi` of `modality`.
 ///
 /// # Safety
@@ -272,16 +267,10 @@ pub unsafe extern "C" fn toothfuse_session_copy_indices(
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
         let t = find(s, modality, fdi)?;
-        let n = 3 * t.mesh.triangles.len();
-        if index_capacity < n {
-            return Err(too_small("indices", n, index_capacity, fdi));
-        }
-        // SAFETY: the caller guarantees room for `index_capacity >= n` values.
-        let out = unsafe { slice_out(indices_out, n, "indices_out") }?;
-        for (o, t) in out.chunks_exact_mut(3).zip(&t.mesh.triangles) {
-            o.copy_from_slice(t);
-        }
-        Ok(())
+        let tris = t.mesh.triangles.as_flattened();
+        let subject = format!("tooth {fdi}");
+        // SAFETY: forwarded contract on `indices_out`.
+        unsafe { copy_out(tris, indices_out, index_capacity, "indices_out", &subject, "indices") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }
@@ -307,14 +296,10 @@ pub unsafe extern "C" fn toothfuse_session_copy_source_vertices(
     ffi_panic_boundary! {
         let body = |s: &Session| -> FfiResult {
         let t = find(s, modality, fdi)?;
-        let n = t.source_vertex.len();
-        if capacity < n {
-            return Err(too_small("source vertex ids", n, capacity, fdi));
-        }
-        // SAFETY: the caller guarantees room for `capacity >= n` values.
-        let out = unsafe { slice_out(source_out, n, "source_out") }?;
-        out.copy_from_slice(&t.source_vertex);
-        Ok(())
+        let subject = format!("tooth {fdi}");
+        let ids = &t.source_vertex;
+        // SAFETY: forwarded contract on `source_out`.
+        unsafe { copy_out(ids, source_out, capacity, "source_out", &subject, "source vertex ids") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

@@ -7,7 +7,7 @@
 //! `toothfuse_session_fuse_registered` after the same registration (and as the one-call
 //! `toothfuse_session_fuse` with the same options).
 
-use super::boundary::{Failure, FfiResult, check_out, ffi_panic_boundary, slice_out, write_out};
+use super::boundary::{Failure, FfiResult, check_out, copy_out, ffi_panic_boundary, write_out};
 use super::mesh::{toothfuse_scalar, write_vertices};
 use super::register::{copy_fdis, toothfuse_options, with_options};
 use super::session::{toothfuse_session, with_session};
@@ -111,32 +111,6 @@ fn cut_tooth(s: &Session, fdi: i32) -> FfiResult<&CutTooth> {
     })
 }
 
-/// Copies `values` into the caller's `out` (parameter `name`, room for `capacity`);
-/// BUFFER_TOO_SMALL naming the tooth and `what` when it is short.
-///
-/// # Safety
-/// `out` must have room for `capacity` `uint32_t`.
-unsafe fn copy_u32s(
-    values: &[u32],
-    out: *mut u32,
-    capacity: usize,
-    name: &str,
-    what: &str,
-    fdi: i32,
-) -> FfiResult {
-    let n = values.len();
-    if capacity < n {
-        return Err(Failure::new(
-            toothfuse_status::BufferTooSmall,
-            format!("cut tooth {fdi}: {n} {what} to copy but the buffer has room for {capacity}"),
-        ));
-    }
-    // SAFETY: the caller guarantees room for `capacity >= n` values.
-    let dst = unsafe { slice_out(out, n, name) }?;
-    dst.copy_from_slice(values);
-    Ok(())
-}
-
 /// Writes the sizes of the cut root of tooth `fdi`: its vertex count, index count (3 per
 /// triangle) and the length of its cut loop (its one boundary loop, where the band meets the
 /// root). WRONG_STATE without a cut; MISSING_DATA for a tooth that was not cut.
@@ -217,7 +191,9 @@ pub unsafe extern "C" fn toothfuse_session_copy_cut_indices(
         let body = |s: &Session| -> FfiResult {
             let tris = cut_tooth(s, fdi)?.root().root.triangles.as_flattened();
             // SAFETY: forwarded contract on `indices_out`.
-            unsafe { copy_u32s(tris, indices_out, index_capacity, "indices_out", "indices", fdi) }
+            unsafe {
+                copy_out(tris, indices_out, index_capacity, "indices_out", &format!("cut tooth {fdi}"), "indices")
+            }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }
@@ -241,7 +217,9 @@ pub unsafe extern "C" fn toothfuse_session_copy_cut_loop(
         let body = |s: &Session| -> FfiResult {
             let lp = cut_tooth(s, fdi)?.cut_loop();
             // SAFETY: forwarded contract on `loop_out`.
-            unsafe { copy_u32s(lp, loop_out, capacity, "loop_out", "loop vertices", fdi) }
+            unsafe {
+                copy_out(lp, loop_out, capacity, "loop_out", &format!("cut tooth {fdi}"), "loop vertices")
+            }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }
