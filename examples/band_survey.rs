@@ -49,6 +49,8 @@ fn main() {
             angles.push(a);
             if a >= 5.0 {
                 at_least_5 += 1;
+            } else {
+                println!("{tag} tooth {fdi}: band min angle {a:.2} deg");
             }
             let to_out = p.truth.world_to_ios.compose(&p.truth.teeth[fdi].ios_drift);
             let truth = SurfaceDistance::new(&p.truth.teeth[fdi].surface.transformed(&to_out));

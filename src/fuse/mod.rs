@@ -6,6 +6,7 @@ mod band_opt;
 mod jaw;
 pub mod quality;
 mod tooth;
+pub mod untangle;
 
 pub use jaw::{CutJaw, FusedJaw, ToothTransforms, cut_jaw, fuse_jaw, ios_crowns, stitch_jaw};
 pub use quality::ToothQuality;
@@ -91,6 +92,7 @@ impl FuseOptions {
                     tangent_scale: 0.0,
                     optimize: false,
                     flips: false,
+                    untangle: false,
                 },
                 check_self_intersections: false,
                 pass_through_cbct_only: false,

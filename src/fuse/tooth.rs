@@ -327,6 +327,9 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     } else if opts.stitch.flips {
         super::band_opt::flip_band(&mut mesh, band_start..band_end, 6);
     }
+    if opts.stitch.untangle {
+        super::untangle::untangle_band(&mut mesh, band_start..band_end, band_off..root_off, 5.0);
+    }
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
     q.crown_vertices = ct.kept_ios;
     q.holes_filled = ct.holes_filled;

@@ -22,6 +22,13 @@ impl TriangleGrid {
     /// Builds the grid over `mesh`; `cell <= 0` picks a cell about twice the mean edge length
     /// (bounded so the grid has at most ~4 million cells).
     pub fn new(mesh: &TriMesh, cell: f64) -> Self {
+        let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+        Self::over(mesh, &all, cell)
+    }
+
+    /// Like [`TriangleGrid::new`], over the faces `faces` of `mesh` only (the grid spans all
+    /// of `mesh`'s vertices).
+    pub fn over(mesh: &TriMesh, faces: &[u32], cell: f64) -> Self {
         let (lo, hi) =
             crate::geom::bounding_box(&mesh.positions).unwrap_or((DVec3::ZERO, DVec3::ZERO));
         let ext = (hi - lo).max(DVec3::splat(1e-9));
@@ -45,14 +52,14 @@ impl TriangleGrid {
             dims,
             entries: Vec::new(),
         };
-        for f in 0..mesh.triangles.len() {
-            let [a, b, c] = mesh.corners(f);
+        for &f in faces {
+            let [a, b, c] = mesh.corners(f as usize);
             let (l, h) = (a.min(b).min(c), a.max(b).max(c));
             let (il, ih) = (g.index_of(l), g.index_of(h));
             for z in il[2]..=ih[2] {
                 for y in il[1]..=ih[1] {
                     for x in il[0]..=ih[0] {
-                        g.entries.push((g.id([x, y, z]), f as u32));
+                        g.entries.push((g.id([x, y, z]), f));
                     }
                 }
             }
@@ -81,6 +88,23 @@ impl TriangleGrid {
             .iter()
             .take_while(move |&&(c, _)| c == id)
             .map(|&(_, f)| f)
+    }
+
+    /// The binned faces sharing a cell with the box `[lo, hi]`, sorted and unique (a superset
+    /// of the faces whose bounding boxes overlap it).
+    pub fn faces_in_box(&self, lo: DVec3, hi: DVec3) -> Vec<u32> {
+        let (il, ih) = (self.index_of(lo), self.index_of(hi));
+        let mut out = Vec::new();
+        for z in il[2]..=ih[2] {
+            for y in il[1]..=ih[1] {
+                for x in il[0]..=ih[0] {
+                    out.extend(self.faces_in(self.id([x, y, z])));
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 
     /// Face pairs `(f, g)`, `f < g`, sharing at least one cell and with overlapping bounding

@@ -11,6 +11,12 @@ use crate::{Error, Result};
 use glam::DVec3;
 use std::f64::consts::TAU;
 
+/// Smallest angle (degrees) the chart triangulation is refined to (Delaunay refinement in the
+/// annulus plane, which is conformal to the chart). Measured on the 20 eval jaws: the band's
+/// smallest 3D angle is ≥ 5° on 210 of 219 teeth with it, 201 without (before the untangling of
+/// `fuse::untangle`); 15° gives the same count, 10° one fewer.
+const REFINE_DEG: f64 = 20.0;
+
 /// The loops, ordered counter-clockwise about the axis, with their caller indices.
 pub(super) struct OrderedLoops<'a> {
     pub uo: &'a [u32],
@@ -97,7 +103,7 @@ pub(super) fn chart_band(
             .iter()
             .map(|&c| (plane(c), DVec3::ZERO, 0.0))
             .collect();
-        match triangulate(&up_xy, &lo_xy, o.uo, o.lo, &interior, loops) {
+        match triangulate(&up_xy, &lo_xy, o.uo, o.lo, &interior, loops, REFINE_DEG) {
             Ok(t) => break (inner, y0, t),
             Err(e) if attempt > 0 => return Err(e),
             Err(_) => {

@@ -68,6 +68,10 @@ pub struct StitchOptions {
     pub optimize: bool,
     /// After assembly, min-angle edge flips between band faces only (fast, no vertex moves).
     pub flips: bool,
+    /// After the flips, move free band vertices of band faces that cross other faces or have
+    /// an angle under 5° to better places in their star, each move checked exactly against the
+    /// faces around it (`fuse::untangle`).
+    pub untangle: bool,
 }
 
 impl Default for StitchOptions {
@@ -77,6 +81,7 @@ impl Default for StitchOptions {
             tangent_scale: 0.8,
             optimize: false,
             flips: true,
+            untangle: true,
         }
     }
 }
@@ -257,7 +262,7 @@ fn loft_band(
             (xy, p.pos, d)
         })
         .collect();
-    match triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops) {
+    match triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops, 0.0) {
         Ok((b, _)) => Ok(b),
         Err(first) => {
             // Fallback when a loop folds back around the axis (the cylindrical projection is not
@@ -276,7 +281,7 @@ fn loft_band(
                     (xy, p.pos, 0.4 * spacing(p.v) * rho / r_mean)
                 })
                 .collect();
-            triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops)
+            triangulate(&up_xy, &lo_xy, uo, lo, &inner, loops, 0.0)
                 .map(|(b, _)| b)
                 .map_err(|e| Error::InvalidArgument(format!("{first}; annulus fallback: {e}")))
         }
@@ -296,6 +301,7 @@ fn triangulate(
     lo: &[u32],
     interior: &[([f64; 2], DVec3, f64)],
     loops: &BandLoops,
+    refine_deg: f64,
 ) -> Result<(Band, Vec<PointOrigin>)> {
     let (nu, nl) = (up_xy.len(), lo_xy.len());
 
@@ -419,6 +425,17 @@ fn triangulate(
             break;
         }
     }
+    if refine_deg > 0.0 {
+        refine(
+            &mut cdt,
+            &mut handle_to_vertex,
+            &mut points,
+            &mut origin,
+            up_xy,
+            lo_xy,
+            refine_deg,
+        );
+    }
     let triangles: Vec<[BandVertex; 3]> =
         band_faces_ordered(&cdt, &up_h, &lo_h, &handle_to_vertex)?;
     // An annulus triangulation has exactly nu + nl + 2·interior triangles.
@@ -433,6 +450,63 @@ fn triangulate(
 }
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
+
+/// Delaunay refinement (Ruppert/Chew, spade's) of the band region to a minimum plane angle of
+/// `deg`, keeping the loop edges whole; new points inside the annulus become band points (free,
+/// at their plane position), points spade puts outside it are left out of the band.
+fn refine(
+    cdt: &mut Cdt,
+    handle_to_vertex: &mut Vec<Option<BandVertex>>,
+    points: &mut Vec<DVec3>,
+    origin: &mut Vec<PointOrigin>,
+    up_xy: &[[f64; 2]],
+    lo_xy: &[[f64; 2]],
+    deg: f64,
+) {
+    let before = cdt.num_vertices();
+    let params = spade::RefinementParameters::<f64>::new()
+        .exclude_outer_faces(true)
+        .keep_constraint_edges()
+        .with_angle_limit(spade::AngleLimit::from_deg(deg))
+        .with_max_additional_vertices(before);
+    cdt.refine(params);
+    let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
+    handle_to_vertex.resize(vh.len(), None);
+    for h in &vh[before..] {
+        let q = cdt.vertex(*h).position();
+        let xy = [q.x, q.y];
+        if polygon_contains(up_xy, xy) && !polygon_contains(lo_xy, xy) {
+            handle_to_vertex[h.index()] = Some(BandVertex::Interior(points.len() as u32));
+            points.push(DVec3::ZERO);
+            origin.push((xy, None));
+        }
+    }
+    // Band faces on three loop vertices (ears at concave margin corners, faces across narrow
+    // bays) have no vertex that can move later: a point at their centroid (the insertion
+    // re-legalises the chord).
+    let loop_vertex = |v: spade::handles::VertexHandle<Point2<f64>, (), spade::CdtEdge<()>>| {
+        matches!(
+            handle_to_vertex.get(v.fix().index()).copied().flatten(),
+            Some(BandVertex::Upper(_) | BandVertex::Lower(_))
+        )
+    };
+    let centroids: Vec<[f64; 2]> = cdt
+        .inner_faces()
+        .filter(|f| f.vertices().iter().all(|&v| loop_vertex(v)))
+        .map(|f| {
+            let c = f.center();
+            [c.x, c.y]
+        })
+        .filter(|&xy| polygon_contains(up_xy, xy) && !polygon_contains(lo_xy, xy))
+        .collect();
+    for xy in centroids {
+        let bv = BandVertex::Interior(points.len() as u32);
+        if let Ok(Some(_)) = cdt_insert(cdt, handle_to_vertex, xy, bv) {
+            points.push(DVec3::ZERO);
+            origin.push((xy, None));
+        }
+    }
+}
 
 /// Where a band point came from: its plane position and the index of the interior input point it
 /// is (`None`: a chord split).

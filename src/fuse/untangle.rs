@@ -1,0 +1,378 @@
+//! Local repair of the band after assembly. The chart band is a graph over the annulus chart, so
+//! where the crown overhangs its own margin (bled gingiva curling under, narrow bays of the
+//! margin) its first rows can cross crown faces, and where the lift stretches the chart a face can
+//! keep an angle under the target. Here each free band vertex of such a face is moved within its
+//! star to the best of a few candidate positions, every candidate checked exactly
+//! ([`triangles_intersect`]) against the faces around it: a move is kept only if its star crosses
+//! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
+//! vertices (IOS margin, CBCT cut) never move.
+
+use crate::mesh::TriMesh;
+use crate::mesh_check::{TriangleGrid, triangles_intersect};
+use glam::DVec3;
+use std::ops::Range;
+
+/// What [`untangle_band`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct UntangleReport {
+    /// Intersecting face pairs with a band face, before.
+    pub crossings_before: usize,
+    /// The same, after.
+    pub crossings_after: usize,
+    /// Vertex moves kept.
+    pub moves: usize,
+}
+
+/// Directions (unnormalized): the 6 axes and 8 diagonals of a cube, in (t1, t2, normal).
+const SPHERE: [(f64, f64, f64); 14] = [
+    (1.0, 0.0, 0.0),
+    (-1.0, 0.0, 0.0),
+    (0.0, 1.0, 0.0),
+    (0.0, -1.0, 0.0),
+    (0.0, 0.0, 1.0),
+    (0.0, 0.0, -1.0),
+    (1.0, 1.0, 1.0),
+    (1.0, 1.0, -1.0),
+    (1.0, -1.0, 1.0),
+    (1.0, -1.0, -1.0),
+    (-1.0, 1.0, 1.0),
+    (-1.0, 1.0, -1.0),
+    (-1.0, -1.0, 1.0),
+    (-1.0, -1.0, -1.0),
+];
+
+fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let ang = |p: DVec3, q: DVec3, r: DVec3| (q - p).angle_between(r - p);
+    ang(a, b, c)
+        .min(ang(b, c, a))
+        .min(ang(c, a, b))
+        .to_degrees()
+}
+
+fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
+    let [a, b, c] = mesh.corners(f);
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
+fn overlap(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
+    a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
+}
+
+/// Band faces `band` of `mesh` (closed: crown, band, root) whose free vertices (`movable`) may
+/// move: see the module doc. `min_angle_deg`: faces with a smaller angle are improved too.
+/// Rounds stop when nothing is left to fix or no move helps. Deterministic.
+pub fn untangle_band(
+    mesh: &mut TriMesh,
+    band: Range<usize>,
+    movable: Range<u32>,
+    min_angle_deg: f64,
+) -> UntangleReport {
+    let mut report = UntangleReport::default();
+    if band.is_empty() {
+        return report;
+    }
+    // Star of each movable vertex (band faces only: movable vertices are in no other face).
+    let nm = movable.len();
+    let mut star: Vec<Vec<u32>> = vec![Vec::new(); nm];
+    for f in band.clone() {
+        for v in mesh.triangles[f] {
+            if movable.contains(&v) {
+                star[(v - movable.start) as usize].push(f as u32);
+            }
+        }
+    }
+    let scale = band_edge(mesh, band.clone());
+    let saved: Vec<DVec3> = mesh.positions[movable.start as usize..movable.end as usize].to_vec();
+    for round in 0..4 {
+        // Faces near the band: those whose boxes meet the band's box grown by a little.
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for f in band.clone() {
+            let (l, h) = bbox(mesh, f);
+            lo = lo.min(l);
+            hi = hi.max(h);
+        }
+        let grow = DVec3::splat(2.0 * scale);
+        let region = (lo - grow, hi + grow);
+        let near: Vec<u32> = (0..mesh.triangles.len())
+            .filter(|&f| overlap(bbox(mesh, f), region))
+            .map(|f| f as u32)
+            .collect();
+        let grid = TriangleGrid::over(mesh, &near, 2.0 * scale);
+        let (crossing, bad) = find_bad(mesh, band.clone(), &grid, min_angle_deg);
+        if round == 0 {
+            report.crossings_before = crossing;
+        }
+        report.crossings_after = crossing;
+        let mut verts: Vec<u32> = bad
+            .iter()
+            .flat_map(|&f| mesh.triangles[f as usize])
+            .filter(|v| movable.contains(v))
+            .collect();
+        verts.sort_unstable();
+        verts.dedup();
+        if verts.is_empty() {
+            break;
+        }
+        let mut moved = 0;
+        for v in verts {
+            let s = &star[(v - movable.start) as usize];
+            if improve_vertex(mesh, v, s, &grid, scale) {
+                moved += 1;
+            }
+        }
+        report.moves += moved;
+        if moved == 0 {
+            break;
+        }
+    }
+    if report.moves > 0 {
+        // Recount after the last round's moves.
+        let grid = TriangleGrid::new(mesh, 2.0 * scale);
+        report.crossings_after = find_bad(mesh, band, &grid, min_angle_deg).0;
+        // Within a round the grid does not follow the moves; should a late move have crossed
+        // an earlier one, nothing is kept.
+        if report.crossings_after > report.crossings_before {
+            mesh.positions[movable.start as usize..movable.end as usize].copy_from_slice(&saved);
+            report.crossings_after = report.crossings_before;
+            report.moves = 0;
+        }
+    }
+    report
+}
+
+fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for f in band {
+        let [a, b, c] = mesh.corners(f);
+        sum += (b - a).length() + (c - b).length() + (a - c).length();
+        n += 3;
+    }
+    if n == 0 { 0.1 } else { sum / n as f64 }
+}
+
+/// Intersecting pairs with a band face (counted once) and the band faces to fix: in such a
+/// pair, or with an angle under `min_angle_deg`.
+fn find_bad(
+    mesh: &TriMesh,
+    band: Range<usize>,
+    grid: &TriangleGrid,
+    min_angle_deg: f64,
+) -> (usize, Vec<u32>) {
+    let mut bad = Vec::new();
+    let mut crossings = 0;
+    for f in band.clone() {
+        let bf = bbox(mesh, f);
+        let mut hit = false;
+        for g in grid.faces_in_box(bf.0, bf.1) {
+            let g = g as usize;
+            if g == f || !overlap(bf, bbox(mesh, g)) {
+                continue;
+            }
+            if triangles_intersect(mesh, f, g) {
+                hit = true;
+                // A band–band pair is seen from both faces.
+                if !(band.contains(&g) && g < f) {
+                    crossings += 1;
+                }
+            }
+        }
+        let [a, b, c] = mesh.corners(f);
+        if hit || min_angle(a, b, c) < min_angle_deg {
+            bad.push(f as u32);
+        }
+    }
+    (crossings, bad)
+}
+
+/// `(crossings of the star with its surroundings, star faces turned over against `normals`,
+/// smallest star angle)` with `v` where it is.
+fn score(mesh: &TriMesh, star: &[u32], normals: &[DVec3], around: &[u32]) -> (usize, usize, f64) {
+    let mut ang = 180.0f64;
+    let mut folded = 0;
+    for (k, &f) in star.iter().enumerate() {
+        let [a, b, c] = mesh.corners(f as usize);
+        let n = (b - a).cross(c - a);
+        if n.dot(normals[k]) <= 0.0 {
+            folded += 1;
+        }
+        ang = ang.min(min_angle(a, b, c));
+    }
+    let mut crossings = 0;
+    for (k, &f) in star.iter().enumerate() {
+        let bf = bbox(mesh, f as usize);
+        for &g in around {
+            // Star–star pairs once.
+            if g == f || (star.contains(&g) && star[..k].contains(&g)) {
+                continue;
+            }
+            if overlap(bf, bbox(mesh, g as usize))
+                && triangles_intersect(mesh, f as usize, g as usize)
+            {
+                crossings += 1;
+            }
+        }
+    }
+    (crossings, folded, ang)
+}
+
+/// Tries candidate positions for `v`; keeps the best if it beats the current one.
+fn improve_vertex(
+    mesh: &mut TriMesh,
+    v: u32,
+    star: &[u32],
+    grid: &TriangleGrid,
+    scale: f64,
+) -> bool {
+    let vi = v as usize;
+    let p0 = mesh.positions[vi];
+    // Reference normals: each star face's own, unless it is folded against the star's mean
+    // (then the mean, so the move may unfold it).
+    let own: Vec<DVec3> = star
+        .iter()
+        .map(|&f| {
+            let [a, b, c] = mesh.corners(f as usize);
+            (b - a).cross(c - a)
+        })
+        .collect();
+    let mean = own.iter().copied().sum::<DVec3>().normalize_or_zero();
+    let normals: Vec<DVec3> = own
+        .iter()
+        .map(|&n| if n.dot(mean) > 0.0 { n } else { mean })
+        .collect();
+    // Neighbour ring and the faces around the star (the star may move by up to ~ one edge).
+    let mut ring: Vec<u32> = star
+        .iter()
+        .flat_map(|&f| mesh.triangles[f as usize])
+        .filter(|&w| w != v)
+        .collect();
+    ring.sort_unstable();
+    ring.dedup();
+    let (mut lo, mut hi) = (p0, p0);
+    for &w in &ring {
+        lo = lo.min(mesh.positions[w as usize]);
+        hi = hi.max(mesh.positions[w as usize]);
+    }
+    let grow = DVec3::splat(0.5 * scale);
+    let around = grid.faces_in_box(lo - grow, hi + grow);
+    let current = score(mesh, star, &normals, &around);
+    let centroid = ring
+        .iter()
+        .map(|&w| mesh.positions[w as usize])
+        .sum::<DVec3>()
+        / ring.len() as f64;
+    let h = ring
+        .iter()
+        .map(|&w| (mesh.positions[w as usize] - p0).length())
+        .sum::<f64>()
+        / ring.len() as f64;
+    let mut cands = vec![
+        p0 + 0.5 * (centroid - p0),
+        centroid,
+        p0 + 0.3 * h * mean,
+        p0 - 0.3 * h * mean,
+        p0 + 0.6 * h * mean,
+        p0 - 0.6 * h * mean,
+    ];
+    for &f in star {
+        let t = mesh.triangles[f as usize];
+        let k = t.iter().position(|&x| x == v).unwrap_or(0);
+        let (a, b) = (
+            mesh.positions[t[(k + 1) % 3] as usize],
+            mesh.positions[t[(k + 2) % 3] as usize],
+        );
+        // Towards the apex of the equilateral triangle on the opposite edge.
+        let m = 0.5 * (a + b);
+        let apex = m + (p0 - m).normalize_or_zero() * (0.866 * (b - a).length());
+        cands.push(p0 + 0.5 * (apex - p0));
+        cands.push(apex);
+    }
+    for &w in &ring {
+        cands.push(p0 + 0.4 * (mesh.positions[w as usize] - p0));
+    }
+    // A coarse sphere of directions in the star's frame, at three radii.
+    let (t1, t2) = mean.any_orthonormal_pair();
+    for r in [0.3, 0.6, 1.0] {
+        for (a, b, c) in SPHERE {
+            cands.push(p0 + r * h * (a * t1 + b * t2 + c * mean).normalize_or_zero());
+        }
+    }
+    // Fewer crossings first, then fewer turned-over faces, then a larger smallest angle; a
+    // move may never turn more faces over.
+    let key = |s: (usize, usize, f64)| (s.0, s.1, -s.2.min(30.0));
+    let better = |a: (usize, usize, f64), b: (usize, usize, f64)| {
+        a.0 < b.0 || (a.0 == b.0 && (a.1 < b.1 || (a.1 == b.1 && a.2 < b.2 - 0.1)))
+    };
+    let mut best = (key(current), p0);
+    for c in cands {
+        if !c.is_finite() || (c - p0).length() > 1.5 * h {
+            continue;
+        }
+        mesh.positions[vi] = c;
+        let s = score(mesh, star, &normals, &around);
+        if s.1 <= current.1 && better(key(s), best.0) {
+            best = (key(s), c);
+        }
+    }
+    mesh.positions[vi] = best.1;
+    best.1 != p0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat square of band faces around one free vertex pushed through a "crown" triangle
+    /// hanging over it: the move must take the vertex out.
+    #[test]
+    fn moves_a_vertex_out_of_a_crossing_face() {
+        // Band: 4 faces around vertex 4 (free) in the z = 0 plane, but vertex 4 raised to
+        // z = 0.5, piercing the crown face 5-6-7 at z = 0.3.
+        let positions = vec![
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(1.0, -1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(-1.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 0.5),
+            DVec3::new(-0.3, -0.3, 0.3),
+            DVec3::new(0.4, -0.3, 0.3),
+            DVec3::new(0.0, 0.4, 0.3),
+        ];
+        let triangles = vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [5, 6, 7]];
+        let mut m = TriMesh::new(positions, triangles);
+        let r = untangle_band(&mut m, 0..4, 4..5, 5.0);
+        assert!(r.crossings_before > 0, "{r:?}");
+        assert_eq!(r.crossings_after, 0, "{r:?}");
+        assert!(r.moves > 0);
+        // Loop (fixed) vertices did not move.
+        assert_eq!(m.positions[0], DVec3::new(-1.0, -1.0, 0.0));
+        assert_eq!(m.positions[5], DVec3::new(-0.3, -0.3, 0.3));
+    }
+
+    /// A sliver (free apex almost on its base) is opened up.
+    #[test]
+    fn raises_a_tiny_angle() {
+        let positions = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.5, 0.02, 0.0),
+        ];
+        let triangles = vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
+        let mut m = TriMesh::new(positions, triangles);
+        let before = (0..4)
+            .map(|f| {
+                let [a, b, c] = m.corners(f);
+                min_angle(a, b, c)
+            })
+            .fold(180.0, f64::min);
+        let r = untangle_band(&mut m, 0..4, 4..5, 5.0);
+        let after = (0..4)
+            .map(|f| {
+                let [a, b, c] = m.corners(f);
+                min_angle(a, b, c)
+            })
+            .fold(180.0, f64::min);
+        assert!(before < 5.0 && after >= 5.0, "{before} -> {after} {r:?}");
+    }
+}
