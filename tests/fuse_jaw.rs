@@ -183,24 +183,29 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
     out
 }
 
-/// What holds on the phantom (measured): crown accuracy; few intersecting face pairs added by the
-/// fusion (over the 219 teeth of the 20 eval jaws: none on 204, at most 9 on the others, where
-/// band faces meet crown faces at the margin; at most 17 on this test's jaws); and a band no farther from the truth
-/// than the loops it is pinned to (the CBCT cut loop carries the CBCT error, the IOS margin the
-/// gingiva that the labels bleed onto) plus 0.4 mm (measured over 219 teeth: excess median
-/// 0.003 mm, p95 0.13 mm, max 0.36 mm on lower incisors with folded margins).
+/// What holds on the phantom (measured): crown accuracy; band angles ≥ 5° on every tooth (219 of
+/// 219 eval teeth, every tooth of this test's jaws); at most one tooth per jaw with intersecting
+/// face pairs added by the fusion, and few there (over the 219 eval teeth: one tooth, 3 pairs,
+/// band faces around a margin vertex between crown slivers of 0.01–0.03 mm; on this test's jaws
+/// one tooth with 2); and a band no farther from the truth than the loops it is pinned to (the
+/// CBCT cut loop carries the CBCT error, the IOS margin the gingiva that the labels bleed onto)
+/// plus 0.4 mm (measured over 219 teeth: excess median 0.006 mm, p95 0.135 mm, max 0.27 mm).
 fn assert_accuracy(results: &[(u8, Accuracy, f64)]) {
     let with_added = results
         .iter()
         .filter(|(_, a, _)| a.added_intersections > 0)
         .count();
     assert!(
-        with_added * 5 <= results.len(),
+        with_added <= 1,
         "{with_added} of {} teeth with added intersections",
         results.len()
     );
-    for (fdi, a, _) in results {
-        assert!(a.added_intersections <= 30, "tooth {fdi}: {a:?}");
+    for (fdi, a, min_angle) in results {
+        assert!(a.added_intersections <= 10, "tooth {fdi}: {a:?}");
+        assert!(
+            *min_angle >= 5.0,
+            "tooth {fdi}: band min angle {min_angle}°"
+        );
         assert!(a.fused_crown_mean <= 0.03, "tooth {fdi}: {a:?}");
         assert!(
             a.cbct_crown_mean >= 3.0 * a.fused_crown_mean,
@@ -260,7 +265,7 @@ fn folded_chart_band_falls_back_to_the_loft() {
 }
 
 #[test]
-#[ignore = "known failing on the phantom: band faces still cross crown faces at the margin on 15 of 219 teeth (2-9 pairs), band min angle < 5° on 18 of 219 (tiny IOS margin edges), and the loops the band is pinned to deviate 0.2-0.4 mm from the truth"]
+#[ignore = "known failing on the phantom: only the band's 0.25 mm bound; the loops the band is pinned to (IOS margin with bled gingiva, CBCT cut) deviate 0.27-0.49 mm from the truth on these jaws, and the band 0.33-0.52 mm"]
 fn default_preset_strict_targets() {
     for jaw in [Jaw::Upper, Jaw::Lower] {
         let r = run(3, jaw, Variant::Full, Preset::Default);
@@ -271,8 +276,8 @@ fn default_preset_strict_targets() {
 /// The default band (graded points in a flat chart of the tooth side, lifted as a graph) against
 /// the earlier one (rings on a Hermite loft between smoothed loops, no clean-up) on one jaw:
 /// no more intersecting face pairs that the fusion adds (pairs not both in the input crown) and
-/// far fewer slivers. Measured (seed 3, upper, full): 2 and 2 added pairs, median band min angle
-/// 11.5° vs 5.5°. (With the earlier phantom, whose crowns folded at the margin, the rings added
+/// far fewer slivers. Measured (seed 3, upper, full): 2 added pairs with the rings, none with the
+/// chart band; median band min angle 5.5° vs 13.6°. (With the earlier phantom, whose crowns folded at the margin, the rings added
 /// ten times more pairs; on clean crowns both bands add few.)
 #[test]
 fn chart_band_beats_loft_rings() {
@@ -293,6 +298,7 @@ fn chart_band_beats_loft_rings() {
         let mut o = FuseOptions::preset(Preset::Default);
         o.stitch.points = points;
         o.stitch.flips = points == PointGeneration::Chart;
+        o.stitch.untangle = points == PointGeneration::Chart;
         let f = fuse_jaw(&p.ios, &p.cbct, &transforms, &o).expect("fuse_jaw");
         let mut added = 0;
         let mut angles = Vec::new();
@@ -322,6 +328,56 @@ fn chart_band_beats_loft_rings() {
         ang_chart >= 4.0 && ang_chart >= 1.5 * ang_rings,
         "median min angle {ang_rings} -> {ang_chart}"
     );
+}
+
+/// The untangling step (`fuse::untangle`, on by default) against the same fusion without it, on
+/// the eval jaw where the chart band alone crossed the crown most (seed 9, lower, metal
+/// artefact; measured: without it teeth 31 and 46 get 7 and 3 added pairs and band angles of
+/// 1.7° and 4.0°; with it no tooth gets either).
+#[test]
+fn untangling_removes_crossings_and_slivers() {
+    let p = match Phantom::generate(&PhantomOptions {
+        seed: 9,
+        jaw: Jaw::Lower,
+        variant: Variant::MetalArtefact,
+        ..Default::default()
+    }) {
+        Ok(p) => p,
+        Err(e) => {
+            println!("SKIPPED: phantom unavailable ({e})");
+            return;
+        }
+    };
+    let transforms = toothfuse::eval::true_transforms(&p);
+    let measure = |untangle: bool| {
+        let mut o = FuseOptions::preset(Preset::Default);
+        o.stitch.untangle = untangle;
+        let f = fuse_jaw(&p.ios, &p.cbct, &transforms, &o).expect("fuse_jaw");
+        let (mut with_added, mut slivers) = (0, 0);
+        for (fdi, t) in &f.teeth {
+            let q = &t.quality;
+            assert!(q.closed && q.manifold && q.components == 1, "tooth {fdi}");
+            let added = added_intersections(t);
+            if added > 0 {
+                with_added += 1;
+            }
+            if q.band_min_angle_deg < 5.0 {
+                slivers += 1;
+            }
+            println!(
+                "untangle {untangle}: tooth {fdi}: {added} added pairs, band min angle {:.1}°",
+                q.band_min_angle_deg
+            );
+        }
+        (with_added, slivers)
+    };
+    let (added_off, slivers_off) = measure(false);
+    let (added_on, slivers_on) = measure(true);
+    assert!(
+        added_off >= 2 && slivers_off >= 1,
+        "{added_off} {slivers_off}"
+    );
+    assert_eq!((added_on, slivers_on), (0, 0));
 }
 
 /// Intersecting face pairs of a fused tooth that the fusion added: pairs where at least one face
