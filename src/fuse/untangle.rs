@@ -49,6 +49,17 @@ fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
         .to_degrees()
 }
 
+/// Whether a corner angle of `a, b, c` is under the angle whose cosine is `cos_limit` (no
+/// inverse cosine: the test runs on every band face).
+fn has_angle_under(a: DVec3, b: DVec3, c: DVec3, cos_limit: f64) -> bool {
+    let corner = |p: DVec3, q: DVec3, r: DVec3| {
+        let (u, v) = (q - p, r - p);
+        let l = (u.length_squared() * v.length_squared()).sqrt();
+        l == 0.0 || u.dot(v) > cos_limit * l
+    };
+    corner(a, b, c) || corner(b, c, a) || corner(c, a, b)
+}
+
 fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
     let [a, b, c] = mesh.corners(f);
     (a.min(b).min(c), a.max(b).max(c))
@@ -84,21 +95,7 @@ pub fn untangle_band(
     let scale = band_edge(mesh, band.clone());
     let saved: Vec<DVec3> = mesh.positions[movable.start as usize..movable.end as usize].to_vec();
     for round in 0..4 {
-        // Faces near the band: those whose boxes meet the band's box grown by a little.
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for f in band.clone() {
-            let (l, h) = bbox(mesh, f);
-            lo = lo.min(l);
-            hi = hi.max(h);
-        }
-        let grow = DVec3::splat(2.0 * scale);
-        let region = (lo - grow, hi + grow);
-        let near: Vec<u32> = (0..mesh.triangles.len())
-            .filter(|&f| overlap(bbox(mesh, f), region))
-            .map(|f| f as u32)
-            .collect();
-        let grid = TriangleGrid::over(mesh, &near, 2.0 * scale);
-        let (crossing, bad) = find_bad(mesh, band.clone(), &grid, min_angle_deg);
+        let (crossing, bad) = find_bad(mesh, band.clone(), scale, min_angle_deg);
         if round == 0 {
             report.crossings_before = crossing;
         }
@@ -113,6 +110,7 @@ pub fn untangle_band(
         if verts.is_empty() {
             break;
         }
+        let grid = near_grid(mesh, band.clone(), scale);
         let mut moved = 0;
         for v in verts {
             let s = &star[(v - movable.start) as usize];
@@ -127,8 +125,7 @@ pub fn untangle_band(
     }
     if report.moves > 0 {
         // Recount after the last round's moves.
-        let grid = TriangleGrid::new(mesh, 2.0 * scale);
-        report.crossings_after = find_bad(mesh, band, &grid, min_angle_deg).0;
+        report.crossings_after = find_bad(mesh, band, scale, min_angle_deg).0;
         // Within a round the grid does not follow the moves; should a late move have crossed
         // an earlier one, nothing is kept.
         if report.crossings_after > report.crossings_before {
@@ -138,6 +135,90 @@ pub fn untangle_band(
         }
     }
     report
+}
+
+/// The band's bounding box grown by two band edges.
+fn band_region(mesh: &TriMesh, band: Range<usize>, scale: f64) -> (DVec3, DVec3) {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for f in band {
+        let (l, h) = bbox(mesh, f);
+        lo = lo.min(l);
+        hi = hi.max(h);
+    }
+    let grow = DVec3::splat(2.0 * scale);
+    (lo - grow, hi + grow)
+}
+
+/// The faces near the band (boxes meeting [`band_region`]), binned.
+fn near_grid(mesh: &TriMesh, band: Range<usize>, scale: f64) -> TriangleGrid {
+    let region = band_region(mesh, band, scale);
+    let near: Vec<u32> = (0..mesh.triangles.len())
+        .filter(|&f| overlap(bbox(mesh, f), region))
+        .map(|f| f as u32)
+        .collect();
+    TriangleGrid::over(mesh, &near, 2.0 * scale)
+}
+
+/// Band faces binned by the cells (of a grid over the band's region) their boxes overlap, with
+/// a per-cell occupancy table so that faces far from the band are rejected without a search.
+struct BandBins {
+    origin: DVec3,
+    cell: f64,
+    dims: [i64; 3],
+    occupied: Vec<bool>,
+    /// `(cell id, band face)`, sorted.
+    entries: Vec<(u64, u32)>,
+}
+
+impl BandBins {
+    fn new(boxes: &[(DVec3, DVec3)], first: usize, region: (DVec3, DVec3), cell: f64) -> Self {
+        let ext = (region.1 - region.0).max(DVec3::splat(1e-9));
+        // At most ~2 million cells.
+        let cell = cell.max((ext.x * ext.y * ext.z / 2.0e6).cbrt()).max(1e-6);
+        let dims = [ext.x, ext.y, ext.z].map(|e| (e / cell).floor() as i64 + 1);
+        let mut b = BandBins {
+            origin: region.0,
+            cell,
+            dims,
+            occupied: vec![false; (dims[0] * dims[1] * dims[2]) as usize],
+            entries: Vec::new(),
+        };
+        for (k, bx) in boxes.iter().enumerate() {
+            let (il, ih) = b.range(*bx);
+            for z in il[2]..=ih[2] {
+                for y in il[1]..=ih[1] {
+                    for x in il[0]..=ih[0] {
+                        let id = b.id([x, y, z]);
+                        b.occupied[id as usize] = true;
+                        b.entries.push((id, (first + k) as u32));
+                    }
+                }
+            }
+        }
+        b.entries.sort_unstable();
+        b
+    }
+
+    fn range(&self, bx: (DVec3, DVec3)) -> ([i64; 3], [i64; 3]) {
+        let idx = |p: DVec3| {
+            let q = (p - self.origin) / self.cell;
+            let c = [q.x, q.y, q.z];
+            [0, 1, 2].map(|k| (c[k].floor() as i64).clamp(0, self.dims[k] - 1))
+        };
+        (idx(bx.0), idx(bx.1))
+    }
+
+    fn id(&self, i: [i64; 3]) -> u64 {
+        ((i[2] * self.dims[1] + i[1]) * self.dims[0] + i[0]) as u64
+    }
+
+    fn in_cell(&self, id: u64) -> impl Iterator<Item = u32> + '_ {
+        let s = self.entries.partition_point(|&(c, _)| c < id);
+        self.entries[s..]
+            .iter()
+            .take_while(move |&&(c, _)| c == id)
+            .map(|&(_, f)| f)
+    }
 }
 
 fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
@@ -155,32 +236,79 @@ fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
 fn find_bad(
     mesh: &TriMesh,
     band: Range<usize>,
-    grid: &TriangleGrid,
+    scale: f64,
     min_angle_deg: f64,
 ) -> (usize, Vec<u32>) {
-    let mut bad = Vec::new();
-    let mut crossings = 0;
-    for f in band.clone() {
-        let bf = bbox(mesh, f);
-        let mut hit = false;
-        for g in grid.faces_in_box(bf.0, bf.1) {
-            let g = g as usize;
-            if g == f || !overlap(bf, bbox(mesh, g)) {
-                continue;
-            }
-            if triangles_intersect(mesh, f, g) {
-                hit = true;
-                // A band–band pair is seen from both faces.
-                if !(band.contains(&g) && g < f) {
-                    crossings += 1;
+    let region = band_region(mesh, band.clone(), scale);
+    let boxes: Vec<(DVec3, DVec3)> = band.clone().map(|f| bbox(mesh, f)).collect();
+    let bins = BandBins::new(&boxes, band.start, region, 2.0 * scale);
+    let bbox_of = |f: u32| boxes[f as usize - band.start];
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    // Band–band: faces sharing a cell.
+    let mut i = 0;
+    let e = &bins.entries;
+    while i < e.len() {
+        let mut j = i;
+        while j < e.len() && e[j].0 == e[i].0 {
+            j += 1;
+        }
+        for (k, &(_, f)) in e[i..j].iter().enumerate() {
+            for &(_, g) in &e[i + k + 1..j] {
+                if overlap(bbox_of(f), bbox_of(g)) {
+                    pairs.push((f.min(g), f.max(g)));
                 }
             }
         }
-        let [a, b, c] = mesh.corners(f);
-        if hit || min_angle(a, b, c) < min_angle_deg {
-            bad.push(f as u32);
+        i = j;
+    }
+    // Band–other: faces in occupied cells.
+    for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
+        let bg = bbox(mesh, g);
+        if !overlap(bg, region) {
+            continue;
+        }
+        let (il, ih) = bins.range(bg);
+        for z in il[2]..=ih[2] {
+            for y in il[1]..=ih[1] {
+                for x in il[0]..=ih[0] {
+                    let id = bins.id([x, y, z]);
+                    if !bins.occupied[id as usize] {
+                        continue;
+                    }
+                    for f in bins.in_cell(id) {
+                        if overlap(bbox_of(f), bg) {
+                            pairs.push((f, g as u32));
+                        }
+                    }
+                }
+            }
         }
     }
+    pairs.sort_unstable();
+    pairs.dedup();
+    let cos_limit = min_angle_deg.to_radians().cos();
+    let mut hit = vec![false; band.len()];
+    let mut crossings = 0;
+    for (f, g) in pairs {
+        let (f, g) = (f as usize, g as usize);
+        if !triangles_intersect(mesh, f, g) {
+            continue;
+        }
+        crossings += 1;
+        for x in [f, g] {
+            if band.contains(&x) {
+                hit[x - band.start] = true;
+            }
+        }
+    }
+    let bad = band
+        .clone()
+        .filter(|&f| {
+            let [a, b, c] = mesh.corners(f);
+            hit[f - band.start] || has_angle_under(a, b, c, cos_limit)
+        })
+        .map(|f| f as u32)
+        .collect();
     (crossings, bad)
 }
 

@@ -156,9 +156,16 @@ fn in_sector(pr: Proj, v: DVec3, a: DVec3, b: DVec3, x: DVec3) -> bool {
 pub fn triangles_intersect(mesh: &TriMesh, f: usize, g: usize) -> bool {
     let t1 = mesh.triangles[f];
     let t2 = mesh.triangles[g];
-    let shared: Vec<u32> = t1.iter().copied().filter(|v| t2.contains(v)).collect();
+    let mut shared = [0u32; 3];
+    let mut ns = 0;
+    for v in t1 {
+        if t2.contains(&v) {
+            shared[ns] = v;
+            ns += 1;
+        }
+    }
     let p = |v: u32| mesh.positions[v as usize];
-    match shared.len() {
+    match ns {
         0 => {
             let [a, b, c] = t1.map(p);
             let [d, e, h] = t2.map(p);
