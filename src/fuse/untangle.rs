@@ -413,13 +413,24 @@ fn improve_vertex(
         let apex = m + (p0 - m).normalize_or_zero() * (0.866 * (b - a).length());
         cands.push(p0 + 0.5 * (apex - p0));
         cands.push(apex);
+        // The face turned about its opposite edge (finds a narrow free wedge between crown
+        // faces that fold at the margin).
+        let axis = (b - a).normalize_or_zero();
+        if axis != DVec3::ZERO {
+            for deg in [
+                15.0f64, -15.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 135.0, -135.0,
+            ] {
+                let q = glam::DQuat::from_axis_angle(axis, deg.to_radians());
+                cands.push(a + q * (p0 - a));
+            }
+        }
     }
     for &w in &ring {
         cands.push(p0 + 0.4 * (mesh.positions[w as usize] - p0));
     }
     // A coarse sphere of directions in the star's frame, at three radii.
     let (t1, t2) = mean.any_orthonormal_pair();
-    for r in [0.3, 0.6, 1.0] {
+    for r in [0.3, 0.6, 1.0, 1.5] {
         for (a, b, c) in SPHERE {
             cands.push(p0 + r * h * (a * t1 + b * t2 + c * mean).normalize_or_zero());
         }
@@ -432,7 +443,7 @@ fn improve_vertex(
     };
     let mut best = (key(current), p0);
     for c in cands {
-        if !c.is_finite() || (c - p0).length() > 1.5 * h {
+        if !c.is_finite() || (c - p0).length() > 2.0 * h {
             continue;
         }
         mesh.positions[vi] = c;
