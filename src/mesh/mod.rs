@@ -3,6 +3,8 @@
 
 mod buffers;
 mod measure;
+#[cfg(test)]
+mod reference_tests;
 mod repair;
 mod split;
 mod topology;

@@ -1,0 +1,218 @@
+//! Randomised equivalence tests: the optimised topology routines against the plain reference
+//! implementations they replaced (same results on arbitrary, also broken, meshes).
+
+use super::TriMesh;
+use super::topology::{EdgeTopology, boundary_loops_of, connected_components_of};
+use super::validate::{ValidationReport, non_manifold_vertices};
+use glam::DVec3;
+
+/// The plain per-vertex fan union (reference for [`non_manifold_vertices`]).
+fn reference_non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
+    let n = mesh.positions.len();
+    // Corners grouped by vertex (counting sort; faces in order within a vertex):
+    // (vertex, face, the two other vertices).
+    let mut start = vec![0usize; n + 1];
+    for t in &mesh.triangles {
+        for &v in t {
+            if (v as usize) < n {
+                start[v as usize + 1] += 1;
+            }
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut corners: Vec<(u32, u32, u32, u32)> = vec![(0, 0, 0, 0); start[n]];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            if v < n {
+                corners[start[v]] = (t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]);
+                start[v] += 1;
+            }
+        }
+    }
+    let mut out = Vec::new();
+    let mut parent: Vec<usize> = Vec::new();
+    let mut nb: Vec<(u32, usize)> = Vec::new();
+    let mut i = 0;
+    while i < corners.len() {
+        let v = corners[i].0;
+        let mut j = i;
+        while j < corners.len() && corners[j].0 == v {
+            j += 1;
+        }
+        let fan = &corners[i..j];
+        // Union faces of the fan that share a neighbour vertex (= share an edge through v).
+        let m = fan.len();
+        parent.clear();
+        parent.extend(0..m);
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        nb.clear();
+        for (idx, c) in fan.iter().enumerate() {
+            nb.push((c.2, idx));
+            nb.push((c.3, idx));
+        }
+        nb.sort_unstable();
+        for w in nb.windows(2) {
+            if w[0].0 == w[1].0 {
+                let (a, b) = (find(&mut parent, w[0].1), find(&mut parent, w[1].1));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+        let roots = (0..m).filter(|&x| find(&mut parent, x) == x).count();
+        if roots > 1 {
+            out.push(v);
+        }
+        i = j;
+    }
+    out
+}
+
+/// The report built from the sorted undirected edge list (reference for
+/// [`TriMesh::topology_report`]).
+fn reference_report(mesh: &TriMesh) -> ValidationReport {
+    let topo = EdgeTopology::new(mesh);
+    let mut boundary_edges = 0;
+    let mut non_manifold_edges = 0;
+    for (a, b, c) in topo.undirected_edges() {
+        let same_dir =
+            topo.faces_of_directed(a, b).count() > 1 || topo.faces_of_directed(b, a).count() > 1;
+        if c == 1 {
+            boundary_edges += 1;
+        } else if c > 2 || same_dir {
+            non_manifold_edges += 1;
+        }
+    }
+    let mut used = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            if let Some(u) = used.get_mut(v as usize) {
+                *u = true;
+            }
+        }
+    }
+    let (_, components) = connected_components_of(&topo, mesh.triangles.len());
+    let loops = if non_manifold_edges == 0 {
+        boundary_loops_of(&topo).len()
+    } else {
+        0
+    };
+    ValidationReport {
+        vertices: mesh.positions.len(),
+        faces: mesh.triangles.len(),
+        boundary_edges,
+        non_manifold_edges,
+        non_manifold_vertices: reference_non_manifold_vertices(mesh).len(),
+        unused_vertices: used.iter().filter(|u| !**u).count(),
+        components,
+        boundary_loops: loops,
+    }
+}
+
+/// A deterministic pseudo-random generator (64-bit LCG).
+pub(super) struct Lcg(pub(super) u64);
+
+impl Lcg {
+    pub(super) fn below(&mut self, n: u32) -> u32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 33) % n as u64) as u32
+    }
+}
+
+/// A closed `w × h` torus grid, then damaged by `rng`: faces removed, flipped, duplicated,
+/// collapsed, vertices glued (bow-ties, non-manifold edges), out-of-range corners; `kinds` = 2
+/// only removes faces, 8 does everything.
+pub(super) fn damaged_torus(rng: &mut Lcg, w: u32, h: u32, damage: u32, kinds: u32) -> TriMesh {
+    let mut positions = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            let (u, v) = (
+                i as f64 / w as f64 * std::f64::consts::TAU,
+                j as f64 / h as f64 * std::f64::consts::TAU,
+            );
+            let r = 3.0 + v.cos();
+            positions.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (j % h) * w + (i % w);
+    let mut triangles = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let nv = positions.len() as u32;
+    for _ in 0..damage {
+        let nf = triangles.len() as u32;
+        if nf == 0 {
+            break;
+        }
+        let f = rng.below(nf) as usize;
+        match rng.below(kinds) {
+            0 | 1 => {
+                triangles.remove(f);
+            }
+            2 => triangles[f].swap(1, 2),
+            3 => triangles.push(triangles[f]),
+            4 => triangles[f][rng.below(3) as usize] = rng.below(nv),
+            5 => {
+                let k = rng.below(3) as usize;
+                triangles[f][k] = triangles[f][(k + 1) % 3];
+            }
+            6 => {
+                let g = rng.below(nf) as usize;
+                triangles.push([triangles[f][0], triangles[f][1], triangles[g][2]]);
+            }
+            _ => triangles.push([rng.below(nv), rng.below(nv), rng.below(nv + 2)]),
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
+#[test]
+fn fan_test_and_report_match_the_reference() {
+    let mut rng = Lcg(7);
+    for case in 0..400u32 {
+        let (w, h) = (3 + rng.below(9), 3 + rng.below(9));
+        let kinds = if case % 2 == 0 { 2 } else { 8 };
+        let m = damaged_torus(&mut rng, w, h, case % 40, kinds);
+        assert_eq!(
+            non_manifold_vertices(&m),
+            reference_non_manifold_vertices(&m),
+            "case {case}"
+        );
+        assert_eq!(m.topology_report(), reference_report(&m), "case {case}");
+    }
+}
+
+#[test]
+fn validation_keeping_the_topology_fails_alike() {
+    let mut rng = Lcg(11);
+    for case in 0..300u32 {
+        let kinds = if case % 2 == 0 { 2 } else { 8 };
+        let (w, h) = (3 + rng.below(6), 3 + rng.below(6));
+        let m = damaged_torus(&mut rng, w, h, case % 12, kinds);
+        for require_closed in [false, true] {
+            let o = super::ValidateOptions {
+                require_closed,
+                allow_zero_area: case % 3 == 0,
+            };
+            assert_eq!(
+                m.validate(&o).map(|_| ()),
+                m.validate_into_topology(&o).map(|_| ()),
+                "case {case}"
+            );
+        }
+    }
+}
