@@ -82,12 +82,18 @@ pub fn repair_open_surface(
         seen.push(k);
         faces.push(*t);
     }
-    let mut order: Vec<usize> = (0..faces.len()).collect();
-    order.sort_by_key(|&i| (seen[i], i));
+    // Sorted by (vertex set, face): the keys are distinct, so an unstable sort gives the
+    // stable order.
+    let mut order: Vec<([u32; 3], u32)> = seen
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k, i as u32))
+        .collect();
+    order.sort_unstable();
     let mut dup = vec![false; faces.len()];
     for w in order.windows(2) {
-        if seen[w[0]] == seen[w[1]] {
-            dup[w[1]] = true;
+        if w[0].0 == w[1].0 {
+            dup[w[1].1 as usize] = true;
         }
     }
     rep.duplicate_faces = dup.iter().filter(|d| **d).count();
@@ -96,35 +102,35 @@ pub fn repair_open_surface(
         .zip(dup)
         .filter_map(|(t, d)| (!d).then_some(t))
         .collect();
-    // 2. At most two faces per undirected edge (greedy in face order).
-    let mut edge_use: Vec<((u32, u32), u8)> = Vec::new();
+    // 2. At most two faces per undirected edge (greedy in face order). Edge ids in sorted
+    // (min, max) order, one per face side.
     let mut kept: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
     {
-        let mut keys: Vec<(u32, u32)> = faces
-            .iter()
-            .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
-            .collect();
-        keys.sort_unstable();
-        keys.dedup();
-        edge_use.extend(keys.into_iter().map(|k| (k, 0u8)));
-        let idx = |e: (u32, u32), eu: &[((u32, u32), u8)]| {
-            eu.binary_search_by_key(&e, |x| x.0).expect("edge listed")
-        };
-        for t in &faces {
-            let es: Vec<usize> = (0..3)
-                .map(|k| {
-                    idx(
-                        (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])),
-                        &edge_use,
-                    )
-                })
-                .collect();
-            if es.iter().any(|&e| edge_use[e].1 >= 2) {
+        let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(faces.len() * 3);
+        for (f, t) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                keyed.push((a.min(b), a.max(b), (3 * f + k) as u32));
+            }
+        }
+        sort_by_first(&mut keyed, n);
+        let mut side_edge = vec![0u32; keyed.len()];
+        let mut edges = 0u32;
+        for (i, &(a, b, side)) in keyed.iter().enumerate() {
+            if i > 0 && (keyed[i - 1].0, keyed[i - 1].1) != (a, b) {
+                edges += 1;
+            }
+            side_edge[side as usize] = edges;
+        }
+        let mut edge_use = vec![0u8; edges as usize + 1];
+        for (f, t) in faces.iter().enumerate() {
+            let es = [side_edge[3 * f], side_edge[3 * f + 1], side_edge[3 * f + 2]];
+            if es.iter().any(|&e| edge_use[e as usize] >= 2) {
                 rep.non_manifold_faces += 1;
                 continue;
             }
             for e in es {
-                edge_use[e].1 += 1;
+                edge_use[e as usize] += 1;
             }
             kept.push(*t);
         }
@@ -205,25 +211,48 @@ pub fn repair_open_surface(
     (m, new_source, rep)
 }
 
+/// Sorts `keys` ascending, exactly as `sort_unstable` would (equal keys are identical): a
+/// counting sort by the first component (a vertex index below `n`), then each run sorted.
+fn sort_by_first(keys: &mut Vec<(u32, u32, u32)>, n: usize) {
+    let mut start = vec![0usize; n + 1];
+    for k in keys.iter() {
+        start[k.0 as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![(0u32, 0u32, 0u32); keys.len()];
+    for &k in keys.iter() {
+        out[fill[k.0 as usize]] = k;
+        fill[k.0 as usize] += 1;
+    }
+    for v in 0..n {
+        out[start[v]..start[v + 1]].sort_unstable();
+    }
+    *keys = out;
+}
+
 /// Makes every edge shared by two faces run in opposite directions in them; returns the number
 /// of faces flipped. Faces that cannot be made consistent (non-orientable) are dropped.
 fn orient_consistently(m: &mut TriMesh) -> usize {
     let nf = m.triangles.len();
     // Undirected edge → faces.
-    let mut keyed: Vec<((u32, u32), u32)> = Vec::with_capacity(nf * 3);
+    let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(nf * 3);
     for (f, t) in m.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            keyed.push(((a.min(b), a.max(b)), f as u32));
+            keyed.push((a.min(b), a.max(b), f as u32));
         }
     }
-    keyed.sort_unstable();
+    sort_by_first(&mut keyed, m.positions.len());
     // Face → neighbour faces across shared edges, in sorted-edge order (CSR: no small vectors).
     let mut start = vec![0usize; nf + 1];
+    let same_edge = |x: &(u32, u32, u32), y: &(u32, u32, u32)| (x.0, x.1) == (y.0, y.1);
     for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 {
-            start[w[0].1 as usize + 1] += 1;
-            start[w[1].1 as usize + 1] += 1;
+        if same_edge(&w[0], &w[1]) {
+            start[w[0].2 as usize + 1] += 1;
+            start[w[1].2 as usize + 1] += 1;
         }
     }
     for f in 0..nf {
@@ -232,11 +261,11 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
     let mut fill = start.clone();
     let mut adjacent = vec![0u32; start[nf]];
     for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 {
-            let (f, g) = (w[0].1 as usize, w[1].1 as usize);
-            adjacent[fill[f]] = w[1].1;
+        if same_edge(&w[0], &w[1]) {
+            let (f, g) = (w[0].2 as usize, w[1].2 as usize);
+            adjacent[fill[f]] = w[1].2;
             fill[f] += 1;
-            adjacent[fill[g]] = w[0].1;
+            adjacent[fill[g]] = w[0].2;
             fill[g] += 1;
         }
     }
@@ -373,6 +402,23 @@ fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>) -> usize {
 mod tests {
     use super::*;
     use crate::mesh::fixtures::{cube, square};
+
+    #[test]
+    fn counting_sort_equals_sort_unstable() {
+        let mut x = 12345u64;
+        let mut next = |n: u64| {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+            ((x >> 33) % n) as u32
+        };
+        for len in [0usize, 1, 2, 17, 500] {
+            let mut keys: Vec<(u32, u32, u32)> =
+                (0..len).map(|_| (next(20), next(20), next(5))).collect();
+            let mut expect = keys.clone();
+            expect.sort_unstable();
+            sort_by_first(&mut keys, 20);
+            assert_eq!(keys, expect);
+        }
+    }
 
     fn disk_with_hole() -> TriMesh {
         // Cube without its bottom (margin) and with one top triangle pair removed (a hole).
