@@ -7,8 +7,8 @@
 //! duplicated, never moved.
 
 use super::TriMesh;
-use super::topology::{boundary_loops, connected_components};
-use super::validate::non_manifold_vertices;
+use super::topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components_of};
+use super::validate::{non_manifold_vertices, non_manifold_vertices_of};
 use glam::DVec3;
 
 /// Options of [`repair_open_surface`].
@@ -136,8 +136,11 @@ pub fn repair_open_surface(
         }
     }
     let mut m = TriMesh::new(mesh.positions.clone(), kept);
-    // 3. Largest component only.
-    let (ids, count) = connected_components(&m);
+    // 3. Largest component only. The edge topology is kept for the later steps while the
+    // triangles stay exactly as they are (the usual clean crown).
+    let topo = EdgeTopology::new(&m);
+    let (ids, count) = connected_components_of(&topo, m.triangles.len());
+    let mut same_topo = Some(topo).filter(|_| count == 1);
     if count > 1 {
         let mut sizes = vec![0usize; count];
         for &c in &ids {
@@ -156,13 +159,24 @@ pub fn repair_open_surface(
         rep.island_faces = before - m.triangles.len();
     }
     // 4. Consistent orientation by breadth-first propagation, then majority by area.
+    let before = m.triangles.len();
     rep.flipped_faces = orient_consistently(&mut m);
+    // No face flipped an odd number of times and none dropped: the triangles are unchanged.
+    if rep.flipped_faces > 0 || m.triangles.len() != before {
+        same_topo = None;
+    }
     // 5. Split bow-tie vertices.
     let mut source: Vec<u32> = (0..n as u32).collect();
-    rep.split_vertices = split_bow_ties(&mut m, &mut source);
+    rep.split_vertices = split_bow_ties(&mut m, &mut source, same_topo.as_ref());
+    if rep.split_vertices > 0 {
+        same_topo = None;
+    }
     // 6. Fill small holes (every loop but the longest, up to the size limit).
     if opts.max_hole_fraction > 0.0 {
-        let loops = boundary_loops(&m);
+        let loops = match &same_topo {
+            Some(topo) => boundary_loops_of(topo),
+            None => boundary_loops(&m),
+        };
         let perims: Vec<f64> = loops
             .iter()
             .map(|l| {
@@ -336,10 +350,14 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
 }
 
 /// Gives each extra fan of a bow-tie vertex its own copy of the vertex; returns copies made.
-fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>) -> usize {
+/// `topo`, if given, is the edge topology of `m` as it comes in (used by the first round).
+fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>, topo: Option<&EdgeTopology>) -> usize {
     let mut made = 0;
-    for _round in 0..4 {
-        let bad = non_manifold_vertices(m);
+    for round in 0..4 {
+        let bad = match topo {
+            Some(t) if round == 0 => non_manifold_vertices_of(m, t),
+            _ => non_manifold_vertices(m),
+        };
         if bad.is_empty() {
             break;
         }
