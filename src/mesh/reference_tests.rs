@@ -5,6 +5,7 @@ use super::TriMesh;
 use super::topology::{EdgeTopology, boundary_loops_of, connected_components_of};
 use super::validate::{ValidationReport, non_manifold_vertices};
 use glam::DVec3;
+use std::collections::BTreeMap;
 
 /// The plain per-vertex fan union (reference for [`non_manifold_vertices`]).
 fn reference_non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
@@ -193,6 +194,77 @@ fn fan_test_and_report_match_the_reference() {
             "case {case}"
         );
         assert_eq!(m.topology_report(), reference_report(&m), "case {case}");
+    }
+}
+
+/// Splitting with a map per label, looked up per face (reference for the label split).
+fn reference_split_faces(mesh: &TriMesh, face_labels: &[Option<i32>]) -> BTreeMap<i32, super::SubMesh> {
+    let mut out: BTreeMap<i32, super::SubMesh> = BTreeMap::new();
+    // Per label: input vertex → local index, built lazily in face order (deterministic).
+    let mut local: BTreeMap<i32, Vec<u32>> = BTreeMap::new();
+    for (f, (t, l)) in mesh.triangles.iter().zip(face_labels).enumerate() {
+        let Some(l) = *l else { continue };
+        let sub = out.entry(l).or_insert_with(|| super::SubMesh {
+            label: l,
+            mesh: TriMesh::default(),
+            source_vertex: Vec::new(),
+            source_face: Vec::new(),
+        });
+        let map = local
+            .entry(l)
+            .or_insert_with(|| vec![u32::MAX; mesh.positions.len()]);
+        let mut tri = [0u32; 3];
+        for (k, &v) in t.iter().enumerate() {
+            if map[v as usize] == u32::MAX {
+                map[v as usize] = sub.mesh.positions.len() as u32;
+                sub.mesh.positions.push(mesh.positions[v as usize]);
+                sub.source_vertex.push(v);
+            }
+            tri[k] = map[v as usize];
+        }
+        sub.mesh.triangles.push(tri);
+        sub.source_face.push(f as u32);
+    }
+    out
+}
+
+#[test]
+fn label_split_matches_the_reference() {
+    let mut rng = Lcg(3);
+    for case in 0..200u32 {
+        let (w, h) = (3 + rng.below(10), 3 + rng.below(10));
+        let m = damaged_torus(&mut rng, w, h, case % 10, 2);
+        // Face labels in runs (as teeth are) or scattered; vertex labels leave straddling faces
+        // unlabeled.
+        let run = 1 + rng.below(40);
+        let labels: Vec<i32> = (0..m.triangles.len() as u32)
+            .map(|f| {
+                if case % 3 == 0 {
+                    rng.below(5) as i32 - 1
+                } else {
+                    ((f / run) % 7) as i32 * 10 - 20
+                }
+            })
+            .collect();
+        let got = super::split_by_face_labels(&m, &labels).unwrap();
+        let all: Vec<Option<i32>> = labels.iter().map(|&l| Some(l)).collect();
+        assert_eq!(got, reference_split_faces(&m, &all), "case {case}");
+        let vl: Vec<i32> = (0..m.positions.len() as u32)
+            .map(|v| (v / run % 3) as i32)
+            .collect();
+        let fl: Vec<Option<i32>> = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let l = vl[t[0] as usize];
+                (vl[t[1] as usize] == l && vl[t[2] as usize] == l).then_some(l)
+            })
+            .collect();
+        assert_eq!(
+            super::split_by_vertex_labels(&m, &vl).unwrap(),
+            reference_split_faces(&m, &fl),
+            "case {case}"
+        );
     }
 }
 
