@@ -8,7 +8,7 @@ use glam::DVec3;
 use std::collections::BTreeMap;
 
 /// The plain per-vertex fan union (reference for [`non_manifold_vertices`]).
-fn reference_non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
+pub(super) fn reference_non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
     let n = mesh.positions.len();
     // Corners grouped by vertex (counting sort; faces in order within a vertex):
     // (vertex, face, the two other vertices).
@@ -78,7 +78,7 @@ fn reference_non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
 
 /// The report built from the sorted undirected edge list (reference for
 /// [`TriMesh::topology_report`]).
-fn reference_report(mesh: &TriMesh) -> ValidationReport {
+pub(super) fn reference_report(mesh: &TriMesh) -> ValidationReport {
     let topo = EdgeTopology::new(mesh);
     let mut boundary_edges = 0;
     let mut non_manifold_edges = 0;
@@ -198,7 +198,10 @@ fn fan_test_and_report_match_the_reference() {
 }
 
 /// Splitting with a map per label, looked up per face (reference for the label split).
-fn reference_split_faces(mesh: &TriMesh, face_labels: &[Option<i32>]) -> BTreeMap<i32, super::SubMesh> {
+pub(super) fn reference_split_faces(
+    mesh: &TriMesh,
+    face_labels: &[Option<i32>],
+) -> BTreeMap<i32, super::SubMesh> {
     let mut out: BTreeMap<i32, super::SubMesh> = BTreeMap::new();
     // Per label: input vertex → local index, built lazily in face order (deterministic).
     let mut local: BTreeMap<i32, Vec<u32>> = BTreeMap::new();
@@ -286,5 +289,48 @@ fn validation_keeping_the_topology_fails_alike() {
                 "case {case}"
             );
         }
+    }
+}
+
+#[test]
+fn duplicate_face_found_as_by_a_full_sort() {
+    let mut rng = Lcg(21);
+    for case in 0..200u32 {
+        let (w, h) = (3 + rng.below(8), 3 + rng.below(8));
+        let mut m = damaged_torus(&mut rng, w, h, case % 5, 2);
+        for _ in 0..case % 4 {
+            let f = rng.below(m.triangles.len() as u32) as usize;
+            let mut t = m.triangles[f];
+            t.rotate_left(rng.below(3) as usize);
+            if rng.below(2) == 0 {
+                t.swap(0, 1);
+            }
+            let at = rng.below(m.triangles.len() as u32 + 1) as usize;
+            m.triangles.insert(at, t);
+        }
+        let mut keyed: Vec<([u32; 3], usize)> = m
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(f, t)| {
+                let mut k = *t;
+                k.sort_unstable();
+                (k, f)
+            })
+            .collect();
+        keyed.sort_unstable();
+        let expect =
+            keyed
+                .windows(2)
+                .find(|w| w[0].0 == w[1].0)
+                .map(|w| crate::Error::DuplicateFace {
+                    face: w[1].1,
+                    first: w[0].1,
+                });
+        let got = m
+            .validate(&super::ValidateOptions::default())
+            .err()
+            .filter(|e| matches!(e, crate::Error::DuplicateFace { .. }));
+        assert_eq!(got, expect, "case {case}");
     }
 }

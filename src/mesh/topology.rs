@@ -209,14 +209,54 @@ pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usi
     (ids, count as usize)
 }
 
-/// The number of connected components of [`connected_components_of`], without the ids.
-pub fn component_count_of(topo: &EdgeTopology, nf: usize) -> usize {
-    let parent = face_union(topo, nf);
-    parent
+/// [`EdgeTopology::edge_counts`] and the component count of [`connected_components_of`] in one pass over the half-edges:
+/// `(boundary edges, non-manifold edges, components)`.
+pub fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usize, usize) {
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    let (mut boundary, mut non_manifold) = (0, 0);
+    let h = &topo.half_edges;
+    let mut i = 0;
+    while i < h.len() {
+        let (a, b, _) = h[i];
+        let mut j = i + 1;
+        while j < h.len() && h[j].0 == a && h[j].1 == b {
+            // The same directed edge twice (non-manifold input) joins its faces too.
+            union_roots(&mut parent, h[j - 1].2, h[j].2);
+            j += 1;
+        }
+        let same = j - i;
+        let mut rev = 0;
+        for g in topo.faces_of_directed(b, a) {
+            rev += 1;
+            if a < b {
+                for &(_, _, f) in &h[i..j] {
+                    union_roots(&mut parent, f, g);
+                }
+            }
+        }
+        if a < b || rev == 0 {
+            if same + rev == 1 {
+                boundary += 1;
+            } else if same + rev > 2 || same > 1 || rev > 1 {
+                non_manifold += 1;
+            }
+        }
+        i = j;
+    }
+    let components = parent
         .iter()
         .enumerate()
         .filter(|&(f, &p)| p == f as u32)
-        .count()
+        .count();
+    (boundary, non_manifold, components)
+}
+
+/// Joins the sets of faces `f` and `g` (the lower root becomes the root).
+fn union_roots(parent: &mut [u32], f: u32, g: u32) {
+    let (ra, rb) = (find(parent, f), find(parent, g));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
 }
 
 fn find(p: &mut [u32], mut x: u32) -> u32 {

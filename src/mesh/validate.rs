@@ -96,18 +96,26 @@ impl TriMesh {
                 }
             }
         }
-        // Duplicate faces: same vertex set.
-        let mut keyed: Vec<([u32; 3], usize)> = self
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(f, t)| {
-                let mut k = *t;
-                k.sort_unstable();
-                (k, f)
-            })
-            .collect();
-        keyed.sort_unstable();
+        // Duplicate faces: same vertex set. The (sorted corners, face) keys in ascending order:
+        // a counting sort by the smallest corner, then each vertex's few keys sorted.
+        let mut start = vec![0usize; n + 1];
+        for t in &self.triangles {
+            start[t[0].min(t[1]).min(t[2]) as usize + 1] += 1;
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut keyed: Vec<([u32; 3], usize)> = vec![([0; 3], 0); self.triangles.len()];
+        for (f, t) in self.triangles.iter().enumerate() {
+            let mut k = *t;
+            k.sort_unstable();
+            keyed[fill[k[0] as usize]] = (k, f);
+            fill[k[0] as usize] += 1;
+        }
+        for v in 0..n {
+            keyed[start[v]..start[v + 1]].sort_unstable();
+        }
         if let Some(w) = keyed.windows(2).find(|w| w[0].0 == w[1].0) {
             return Err(Error::DuplicateFace {
                 face: w[1].1,
@@ -155,7 +163,8 @@ impl TriMesh {
 
     /// [`TriMesh::topology_report`] from an already built topology of this mesh.
     pub fn topology_report_of(&self, topo: &EdgeTopology) -> ValidationReport {
-        let (boundary_edges, non_manifold_edges) = topo.edge_counts();
+        let (boundary_edges, non_manifold_edges, components) =
+            super::topology::edge_and_component_counts(topo, self.triangles.len());
         let mut used = vec![false; self.positions.len()];
         for t in &self.triangles {
             for &v in t {
@@ -164,7 +173,6 @@ impl TriMesh {
                 }
             }
         }
-        let components = super::topology::component_count_of(topo, self.triangles.len());
         // Without non-manifold edges, a boundary half-edge (no reverse partner) is exactly a
         // boundary edge: no boundary edge, no loop.
         let loops = if non_manifold_edges == 0 && boundary_edges > 0 {
