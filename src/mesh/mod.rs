@@ -9,6 +9,7 @@ mod repair;
 mod split;
 mod topology;
 mod validate;
+mod vertex_sort;
 
 pub use buffers::{Scalar, VertexBuffer};
 pub use repair::{RepairOptions, RepairReport, repair_open_surface};

@@ -9,6 +9,7 @@
 use super::TriMesh;
 use super::topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components_of};
 use super::validate::{non_manifold_vertices, non_manifold_vertices_of};
+use super::vertex_sort::sort_by_vertex;
 use glam::DVec3;
 
 /// Options of [`repair_open_surface`].
@@ -89,7 +90,7 @@ pub fn repair_open_surface(
         .enumerate()
         .map(|(i, &k)| (k, i as u32))
         .collect();
-    order.sort_unstable();
+    sort_by_vertex(&mut order, n, |k| k.0[0]);
     let mut dup = vec![false; faces.len()];
     for w in order.windows(2) {
         if w[0].0 == w[1].0 {
@@ -113,7 +114,7 @@ pub fn repair_open_surface(
                 keyed.push((a.min(b), a.max(b), (3 * f + k) as u32));
             }
         }
-        sort_by_first(&mut keyed, n);
+        sort_by_vertex(&mut keyed, n, |k| k.0);
         let mut side_edge = vec![0u32; keyed.len()];
         let mut edges = 0u32;
         for (i, &(a, b, side)) in keyed.iter().enumerate() {
@@ -225,28 +226,6 @@ pub fn repair_open_surface(
     (m, new_source, rep)
 }
 
-/// Sorts `keys` ascending, exactly as `sort_unstable` would (equal keys are identical): a
-/// counting sort by the first component (a vertex index below `n`), then each run sorted.
-fn sort_by_first(keys: &mut Vec<(u32, u32, u32)>, n: usize) {
-    let mut start = vec![0usize; n + 1];
-    for k in keys.iter() {
-        start[k.0 as usize + 1] += 1;
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut out = vec![(0u32, 0u32, 0u32); keys.len()];
-    for &k in keys.iter() {
-        out[fill[k.0 as usize]] = k;
-        fill[k.0 as usize] += 1;
-    }
-    for v in 0..n {
-        out[start[v]..start[v + 1]].sort_unstable();
-    }
-    *keys = out;
-}
-
 /// Makes every edge shared by two faces run in opposite directions in them; returns the number
 /// of faces flipped. Faces that cannot be made consistent (non-orientable) are dropped.
 fn orient_consistently(m: &mut TriMesh) -> usize {
@@ -259,7 +238,7 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
             keyed.push((a.min(b), a.max(b), f as u32));
         }
     }
-    sort_by_first(&mut keyed, m.positions.len());
+    sort_by_vertex(&mut keyed, m.positions.len(), |k| k.0);
     // Face → neighbour faces across shared edges, in sorted-edge order (CSR: no small vectors).
     let mut start = vec![0usize; nf + 1];
     let same_edge = |x: &(u32, u32, u32), y: &(u32, u32, u32)| (x.0, x.1) == (y.0, y.1);
@@ -420,23 +399,6 @@ fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>, topo: Option<&EdgeTopo
 mod tests {
     use super::*;
     use crate::mesh::fixtures::{cube, square};
-
-    #[test]
-    fn counting_sort_equals_sort_unstable() {
-        let mut x = 12345u64;
-        let mut next = |n: u64| {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
-            ((x >> 33) % n) as u32
-        };
-        for len in [0usize, 1, 2, 17, 500] {
-            let mut keys: Vec<(u32, u32, u32)> =
-                (0..len).map(|_| (next(20), next(20), next(5))).collect();
-            let mut expect = keys.clone();
-            expect.sort_unstable();
-            sort_by_first(&mut keys, 20);
-            assert_eq!(keys, expect);
-        }
-    }
 
     fn disk_with_hole() -> TriMesh {
         // Cube without its bottom (margin) and with one top triangle pair removed (a hole).

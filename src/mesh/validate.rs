@@ -96,26 +96,18 @@ impl TriMesh {
                 }
             }
         }
-        // Duplicate faces: same vertex set. The (sorted corners, face) keys in ascending order:
-        // a counting sort by the smallest corner, then each vertex's few keys sorted.
-        let mut start = vec![0usize; n + 1];
-        for t in &self.triangles {
-            start[t[0].min(t[1]).min(t[2]) as usize + 1] += 1;
-        }
-        for v in 0..n {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut keyed: Vec<([u32; 3], usize)> = vec![([0; 3], 0); self.triangles.len()];
-        for (f, t) in self.triangles.iter().enumerate() {
-            let mut k = *t;
-            k.sort_unstable();
-            keyed[fill[k[0] as usize]] = (k, f);
-            fill[k[0] as usize] += 1;
-        }
-        for v in 0..n {
-            keyed[start[v]..start[v + 1]].sort_unstable();
-        }
+        // Duplicate faces: same vertex set.
+        let mut keyed: Vec<([u32; 3], usize)> = self
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(f, t)| {
+                let mut k = *t;
+                k.sort_unstable();
+                (k, f)
+            })
+            .collect();
+        super::vertex_sort::sort_by_vertex(&mut keyed, n, |k| k.0[0]);
         if let Some(w) = keyed.windows(2).find(|w| w[0].0 == w[1].0) {
             return Err(Error::DuplicateFace {
                 face: w[1].1,
