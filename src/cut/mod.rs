@@ -78,11 +78,13 @@ pub fn cut_crown(
             opts.offset
         )));
     }
-    cbct.validate(&ValidateOptions {
+    // The checks of `validate` (same errors), keeping the edge topology for the adjacency.
+    let topo = cbct.validate_into_topology(&ValidateOptions {
         require_closed: true,
         allow_zero_area: true,
     })?;
-    let adj = region::face_adjacency(cbct)?;
+    let adj = region::face_adjacency_of(cbct, &topo)?;
+    drop(topo);
     let nf = cbct.triangles.len();
     let h: Vec<f64> = cbct.positions.iter().map(|&p| frame.height(p)).collect();
     // Seeds: the face with the lowest highest corner (apex) and the highest lowest corner (top).

@@ -8,7 +8,11 @@ use crate::{Error, Result};
 /// Face adjacency of a closed manifold mesh: `adj[f][k]` is the face across edge
 /// `t[k] → t[k+1]`.
 pub fn face_adjacency(mesh: &TriMesh) -> Result<Vec<[u32; 3]>> {
-    let topo = EdgeTopology::new(mesh);
+    face_adjacency_of(mesh, &EdgeTopology::new(mesh))
+}
+
+/// [`face_adjacency`] from an already built topology of `mesh`.
+pub fn face_adjacency_of(mesh: &TriMesh, topo: &EdgeTopology) -> Result<Vec<[u32; 3]>> {
     let mut adj = vec![[u32::MAX; 3]; mesh.triangles.len()];
     for (f, t) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {

@@ -3,10 +3,13 @@
 
 mod buffers;
 mod measure;
+#[cfg(test)]
+mod reference_tests;
 mod repair;
 mod split;
 mod topology;
 mod validate;
+mod vertex_sort;
 
 pub use buffers::{Scalar, VertexBuffer};
 pub use repair::{RepairOptions, RepairReport, repair_open_surface};

@@ -7,8 +7,9 @@
 //! duplicated, never moved.
 
 use super::TriMesh;
-use super::topology::{boundary_loops, connected_components};
-use super::validate::non_manifold_vertices;
+use super::topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components_of};
+use super::validate::{non_manifold_vertices, non_manifold_vertices_of};
+use super::vertex_sort::sort_by_vertex;
 use glam::DVec3;
 
 /// Options of [`repair_open_surface`].
@@ -82,12 +83,18 @@ pub fn repair_open_surface(
         seen.push(k);
         faces.push(*t);
     }
-    let mut order: Vec<usize> = (0..faces.len()).collect();
-    order.sort_by_key(|&i| (seen[i], i));
+    // Sorted by (vertex set, face): the keys are distinct, so an unstable sort gives the
+    // stable order.
+    let mut order: Vec<([u32; 3], u32)> = seen
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k, i as u32))
+        .collect();
+    sort_by_vertex(&mut order, n, |k| k.0[0]);
     let mut dup = vec![false; faces.len()];
     for w in order.windows(2) {
-        if seen[w[0]] == seen[w[1]] {
-            dup[w[1]] = true;
+        if w[0].0 == w[1].0 {
+            dup[w[1].1 as usize] = true;
         }
     }
     rep.duplicate_faces = dup.iter().filter(|d| **d).count();
@@ -96,42 +103,45 @@ pub fn repair_open_surface(
         .zip(dup)
         .filter_map(|(t, d)| (!d).then_some(t))
         .collect();
-    // 2. At most two faces per undirected edge (greedy in face order).
-    let mut edge_use: Vec<((u32, u32), u8)> = Vec::new();
+    // 2. At most two faces per undirected edge (greedy in face order). Edge ids in sorted
+    // (min, max) order, one per face side.
     let mut kept: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
     {
-        let mut keys: Vec<(u32, u32)> = faces
-            .iter()
-            .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
-            .collect();
-        keys.sort_unstable();
-        keys.dedup();
-        edge_use.extend(keys.into_iter().map(|k| (k, 0u8)));
-        let idx = |e: (u32, u32), eu: &[((u32, u32), u8)]| {
-            eu.binary_search_by_key(&e, |x| x.0).expect("edge listed")
-        };
-        for t in &faces {
-            let es: Vec<usize> = (0..3)
-                .map(|k| {
-                    idx(
-                        (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])),
-                        &edge_use,
-                    )
-                })
-                .collect();
-            if es.iter().any(|&e| edge_use[e].1 >= 2) {
+        let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(faces.len() * 3);
+        for (f, t) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                keyed.push((a.min(b), a.max(b), (3 * f + k) as u32));
+            }
+        }
+        sort_by_vertex(&mut keyed, n, |k| k.0);
+        let mut side_edge = vec![0u32; keyed.len()];
+        let mut edges = 0u32;
+        for (i, &(a, b, side)) in keyed.iter().enumerate() {
+            if i > 0 && (keyed[i - 1].0, keyed[i - 1].1) != (a, b) {
+                edges += 1;
+            }
+            side_edge[side as usize] = edges;
+        }
+        let mut edge_use = vec![0u8; edges as usize + 1];
+        for (f, t) in faces.iter().enumerate() {
+            let es = [side_edge[3 * f], side_edge[3 * f + 1], side_edge[3 * f + 2]];
+            if es.iter().any(|&e| edge_use[e as usize] >= 2) {
                 rep.non_manifold_faces += 1;
                 continue;
             }
             for e in es {
-                edge_use[e].1 += 1;
+                edge_use[e as usize] += 1;
             }
             kept.push(*t);
         }
     }
     let mut m = TriMesh::new(mesh.positions.clone(), kept);
-    // 3. Largest component only.
-    let (ids, count) = connected_components(&m);
+    // 3. Largest component only. The edge topology is kept for the later steps while the
+    // triangles stay exactly as they are (the usual clean crown).
+    let topo = EdgeTopology::new(&m);
+    let (ids, count) = connected_components_of(&topo, m.triangles.len());
+    let mut same_topo = Some(topo).filter(|_| count == 1);
     if count > 1 {
         let mut sizes = vec![0usize; count];
         for &c in &ids {
@@ -150,13 +160,24 @@ pub fn repair_open_surface(
         rep.island_faces = before - m.triangles.len();
     }
     // 4. Consistent orientation by breadth-first propagation, then majority by area.
+    let before = m.triangles.len();
     rep.flipped_faces = orient_consistently(&mut m);
+    // No face flipped an odd number of times and none dropped: the triangles are unchanged.
+    if rep.flipped_faces > 0 || m.triangles.len() != before {
+        same_topo = None;
+    }
     // 5. Split bow-tie vertices.
     let mut source: Vec<u32> = (0..n as u32).collect();
-    rep.split_vertices = split_bow_ties(&mut m, &mut source);
+    rep.split_vertices = split_bow_ties(&mut m, &mut source, same_topo.as_ref());
+    if rep.split_vertices > 0 {
+        same_topo = None;
+    }
     // 6. Fill small holes (every loop but the longest, up to the size limit).
     if opts.max_hole_fraction > 0.0 {
-        let loops = boundary_loops(&m);
+        let loops = match &same_topo {
+            Some(topo) => boundary_loops_of(topo),
+            None => boundary_loops(&m),
+        };
         let perims: Vec<f64> = loops
             .iter()
             .map(|l| {
@@ -210,20 +231,21 @@ pub fn repair_open_surface(
 fn orient_consistently(m: &mut TriMesh) -> usize {
     let nf = m.triangles.len();
     // Undirected edge → faces.
-    let mut keyed: Vec<((u32, u32), u32)> = Vec::with_capacity(nf * 3);
+    let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(nf * 3);
     for (f, t) in m.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            keyed.push(((a.min(b), a.max(b)), f as u32));
+            keyed.push((a.min(b), a.max(b), f as u32));
         }
     }
-    keyed.sort_unstable();
+    sort_by_vertex(&mut keyed, m.positions.len(), |k| k.0);
     // Face → neighbour faces across shared edges, in sorted-edge order (CSR: no small vectors).
     let mut start = vec![0usize; nf + 1];
+    let same_edge = |x: &(u32, u32, u32), y: &(u32, u32, u32)| (x.0, x.1) == (y.0, y.1);
     for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 {
-            start[w[0].1 as usize + 1] += 1;
-            start[w[1].1 as usize + 1] += 1;
+        if same_edge(&w[0], &w[1]) {
+            start[w[0].2 as usize + 1] += 1;
+            start[w[1].2 as usize + 1] += 1;
         }
     }
     for f in 0..nf {
@@ -232,11 +254,11 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
     let mut fill = start.clone();
     let mut adjacent = vec![0u32; start[nf]];
     for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 {
-            let (f, g) = (w[0].1 as usize, w[1].1 as usize);
-            adjacent[fill[f]] = w[1].1;
+        if same_edge(&w[0], &w[1]) {
+            let (f, g) = (w[0].2 as usize, w[1].2 as usize);
+            adjacent[fill[f]] = w[1].2;
             fill[f] += 1;
-            adjacent[fill[g]] = w[0].1;
+            adjacent[fill[g]] = w[0].2;
             fill[g] += 1;
         }
     }
@@ -307,10 +329,14 @@ fn orient_consistently(m: &mut TriMesh) -> usize {
 }
 
 /// Gives each extra fan of a bow-tie vertex its own copy of the vertex; returns copies made.
-fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>) -> usize {
+/// `topo`, if given, is the edge topology of `m` as it comes in (used by the first round).
+fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>, topo: Option<&EdgeTopology>) -> usize {
     let mut made = 0;
-    for _round in 0..4 {
-        let bad = non_manifold_vertices(m);
+    for round in 0..4 {
+        let bad = match topo {
+            Some(t) if round == 0 => non_manifold_vertices_of(m, t),
+            _ => non_manifold_vertices(m),
+        };
         if bad.is_empty() {
             break;
         }

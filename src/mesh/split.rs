@@ -61,31 +61,57 @@ pub fn split_by_face_labels(mesh: &TriMesh, labels: &[i32]) -> Result<BTreeMap<i
 }
 
 fn split_faces(mesh: &TriMesh, face_labels: &[Option<i32>]) -> BTreeMap<i32, SubMesh> {
-    let mut out: BTreeMap<i32, SubMesh> = BTreeMap::new();
-    // Per label: input vertex → local index, built lazily in face order (deterministic).
-    let mut local: BTreeMap<i32, Vec<u32>> = BTreeMap::new();
-    for (f, (t, l)) in mesh.triangles.iter().zip(face_labels).enumerate() {
+    // Faces per label, in face order; labels sorted (a label usually runs over many faces in a
+    // row, so the last one is tried first).
+    let mut labels: Vec<i32> = Vec::new();
+    let mut groups: Vec<Vec<u32>> = Vec::new();
+    let mut last: Option<(i32, usize)> = None;
+    for (f, l) in face_labels.iter().enumerate() {
         let Some(l) = *l else { continue };
-        let sub = out.entry(l).or_insert_with(|| SubMesh {
+        let g = match last {
+            Some((ll, g)) if ll == l => g,
+            _ => match labels.binary_search(&l) {
+                Ok(g) => g,
+                Err(g) => {
+                    labels.insert(g, l);
+                    groups.insert(g, Vec::new());
+                    g
+                }
+            },
+        };
+        last = Some((l, g));
+        groups[g].push(f as u32);
+    }
+    // Per label: input vertex → local index in order of first use (one map, reset after each
+    // label).
+    let mut map = vec![u32::MAX; mesh.positions.len()];
+    let mut out = BTreeMap::new();
+    for (l, faces) in labels.into_iter().zip(groups) {
+        let mut sub = SubMesh {
             label: l,
             mesh: TriMesh::default(),
             source_vertex: Vec::new(),
-            source_face: Vec::new(),
-        });
-        let map = local
-            .entry(l)
-            .or_insert_with(|| vec![u32::MAX; mesh.positions.len()]);
-        let mut tri = [0u32; 3];
-        for (k, &v) in t.iter().enumerate() {
-            if map[v as usize] == u32::MAX {
-                map[v as usize] = sub.mesh.positions.len() as u32;
-                sub.mesh.positions.push(mesh.positions[v as usize]);
-                sub.source_vertex.push(v);
+            source_face: Vec::with_capacity(faces.len()),
+        };
+        sub.mesh.triangles.reserve(faces.len());
+        for f in faces {
+            let t = mesh.triangles[f as usize];
+            let mut tri = [0u32; 3];
+            for (k, &v) in t.iter().enumerate() {
+                if map[v as usize] == u32::MAX {
+                    map[v as usize] = sub.mesh.positions.len() as u32;
+                    sub.mesh.positions.push(mesh.positions[v as usize]);
+                    sub.source_vertex.push(v);
+                }
+                tri[k] = map[v as usize];
             }
-            tri[k] = map[v as usize];
+            sub.mesh.triangles.push(tri);
+            sub.source_face.push(f);
         }
-        sub.mesh.triangles.push(tri);
-        sub.source_face.push(f as u32);
+        for &v in &sub.source_vertex {
+            map[v as usize] = u32::MAX;
+        }
+        out.insert(l, sub);
     }
     out
 }

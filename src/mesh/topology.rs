@@ -50,6 +50,19 @@ impl EdgeTopology {
         }
     }
 
+    /// The half-edges leaving `v` (sorted by target vertex, then face); empty for a vertex no
+    /// face uses.
+    #[inline]
+    pub fn leaving(&self, v: u32) -> &[(u32, u32, u32)] {
+        match (
+            self.offsets.get(v as usize),
+            self.offsets.get(v as usize + 1),
+        ) {
+            (Some(&s), Some(&e)) => &self.half_edges[s as usize..e as usize],
+            _ => &[],
+        }
+    }
+
     /// Faces holding the directed edge `a → b`.
     pub fn faces_of_directed(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
         let block: &[(u32, u32, u32)] = match (
@@ -90,6 +103,35 @@ impl EdgeTopology {
         }
         out.sort_unstable();
         out
+    }
+
+    /// `(boundary, non-manifold)` undirected edge counts, classified as in
+    /// [`EdgeTopology::undirected_edges`]: used by one face, or by more than two faces or twice
+    /// in one direction. One pass over the half-edges, nothing allocated.
+    pub fn edge_counts(&self) -> (usize, usize) {
+        let (mut boundary, mut non_manifold) = (0, 0);
+        let h = &self.half_edges;
+        let mut i = 0;
+        while i < h.len() {
+            let (a, b, _) = h[i];
+            let mut j = i + 1;
+            while j < h.len() && h[j].0 == a && h[j].1 == b {
+                j += 1;
+            }
+            let same = j - i;
+            let rev = self.faces_of_directed(b, a).count();
+            // The undirected edge is counted once: from its smaller end, or from this end when
+            // the other direction is absent (as `undirected_edges` lists it).
+            if a < b || rev == 0 {
+                if same + rev == 1 {
+                    boundary += 1;
+                } else if same + rev > 2 || same > 1 || rev > 1 {
+                    non_manifold += 1;
+                }
+            }
+            i = j;
+        }
+        (boundary, non_manifold)
     }
 
     /// Directed boundary half-edges: `a → b` present with no `b → a` partner, sorted.
@@ -152,14 +194,82 @@ pub fn connected_components(mesh: &TriMesh) -> (Vec<u32>, usize) {
 
 /// [`connected_components`] from an already built topology of a mesh with `nf` faces.
 pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usize) {
-    let mut parent: Vec<u32> = (0..nf as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
+    let mut parent = face_union(topo, nf);
+    let mut ids = vec![u32::MAX; nf];
+    let mut root_id = vec![u32::MAX; nf];
+    let mut count = 0u32;
+    for (f, id) in ids.iter_mut().enumerate() {
+        let r = find(&mut parent, f as u32) as usize;
+        if root_id[r] == u32::MAX {
+            root_id[r] = count;
+            count += 1;
         }
-        x
+        *id = root_id[r];
     }
+    (ids, count as usize)
+}
+
+/// [`EdgeTopology::edge_counts`] and the component count of [`connected_components_of`] in one pass over the half-edges:
+/// `(boundary edges, non-manifold edges, components)`.
+pub fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usize, usize) {
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    let (mut boundary, mut non_manifold) = (0, 0);
+    let h = &topo.half_edges;
+    let mut i = 0;
+    while i < h.len() {
+        let (a, b, _) = h[i];
+        let mut j = i + 1;
+        while j < h.len() && h[j].0 == a && h[j].1 == b {
+            // The same directed edge twice (non-manifold input) joins its faces too.
+            union_roots(&mut parent, h[j - 1].2, h[j].2);
+            j += 1;
+        }
+        let same = j - i;
+        let mut rev = 0;
+        for g in topo.faces_of_directed(b, a) {
+            rev += 1;
+            if a < b {
+                for &(_, _, f) in &h[i..j] {
+                    union_roots(&mut parent, f, g);
+                }
+            }
+        }
+        if a < b || rev == 0 {
+            if same + rev == 1 {
+                boundary += 1;
+            } else if same + rev > 2 || same > 1 || rev > 1 {
+                non_manifold += 1;
+            }
+        }
+        i = j;
+    }
+    let components = parent
+        .iter()
+        .enumerate()
+        .filter(|&(f, &p)| p == f as u32)
+        .count();
+    (boundary, non_manifold, components)
+}
+
+/// Joins the sets of faces `f` and `g` (the lower root becomes the root).
+fn union_roots(parent: &mut [u32], f: u32, g: u32) {
+    let (ra, rb) = (find(parent, f), find(parent, g));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
+}
+
+fn find(p: &mut [u32], mut x: u32) -> u32 {
+    while p[x as usize] != x {
+        p[x as usize] = p[p[x as usize] as usize];
+        x = p[x as usize];
+    }
+    x
+}
+
+/// Union-find forest of the faces joined by shared edges (roots: the component's lowest face).
+fn face_union(topo: &EdgeTopology, nf: usize) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
     let mut union = |f: u32, g: u32| {
         let (ra, rb) = (find(&mut parent, f), find(&mut parent, g));
         if ra != rb {
@@ -183,18 +293,7 @@ pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usi
             union(f, g);
         }
     }
-    let mut ids = vec![u32::MAX; nf];
-    let mut root_id = vec![u32::MAX; nf];
-    let mut count = 0u32;
-    for (f, id) in ids.iter_mut().enumerate() {
-        let r = find(&mut parent, f as u32) as usize;
-        if root_id[r] == u32::MAX {
-            root_id[r] = count;
-            count += 1;
-        }
-        *id = root_id[r];
-    }
-    (ids, count as usize)
+    parent
 }
 
 #[cfg(test)]

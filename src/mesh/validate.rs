@@ -47,6 +47,33 @@ impl TriMesh {
     /// Order: non-finite vertex, index out of range, degenerate face, duplicate face,
     /// non-manifold edge, non-manifold vertex, then (if required) not closed.
     pub fn validate(&self, opts: &ValidateOptions) -> Result<ValidationReport> {
+        self.check_elements(opts)?;
+        let topo = EdgeTopology::new(self);
+        let report = self.topology_report_of(&topo);
+        self.check_topology(opts, &topo, &report)?;
+        Ok(report)
+    }
+
+    /// [`TriMesh::validate`] without the report's components and loops, returning the edge
+    /// topology it built (for callers that need it next, e.g. face adjacency): the same
+    /// errors, in the same order.
+    pub(crate) fn validate_into_topology(&self, opts: &ValidateOptions) -> Result<EdgeTopology> {
+        self.check_elements(opts)?;
+        let topo = EdgeTopology::new(self);
+        let (boundary_edges, non_manifold_edges) = topo.edge_counts();
+        let counts = ValidationReport {
+            boundary_edges,
+            non_manifold_edges,
+            non_manifold_vertices: non_manifold_vertices_of(self, &topo).len(),
+            ..Default::default()
+        };
+        self.check_topology(opts, &topo, &counts)?;
+        Ok(topo)
+    }
+
+    /// The per-element checks of [`TriMesh::validate`]: finite positions, indices in range,
+    /// no degenerate or duplicate face.
+    fn check_elements(&self, opts: &ValidateOptions) -> Result<()> {
         let n = self.positions.len();
         if let Some(v) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::NonFinite { vertex: v });
@@ -80,16 +107,24 @@ impl TriMesh {
                 (k, f)
             })
             .collect();
-        keyed.sort_unstable();
+        super::vertex_sort::sort_by_vertex(&mut keyed, n, |k| k.0[0]);
         if let Some(w) = keyed.windows(2).find(|w| w[0].0 == w[1].0) {
             return Err(Error::DuplicateFace {
                 face: w[1].1,
                 first: w[0].1,
             });
         }
-        let report = self.topology_report();
+        Ok(())
+    }
+
+    /// The topological checks of [`TriMesh::validate`] from the counts in `report`.
+    fn check_topology(
+        &self,
+        opts: &ValidateOptions,
+        topo: &EdgeTopology,
+        report: &ValidationReport,
+    ) -> Result<()> {
         if report.non_manifold_edges > 0 {
-            let topo = EdgeTopology::new(self);
             for (a, b, c) in topo.undirected_edges() {
                 let same_dir = topo.faces_of_directed(a, b).count() > 1
                     || topo.faces_of_directed(b, a).count() > 1;
@@ -99,7 +134,7 @@ impl TriMesh {
             }
         }
         if report.non_manifold_vertices > 0
-            && let Some(v) = non_manifold_vertices(self).first()
+            && let Some(v) = non_manifold_vertices_of(self, topo).first()
         {
             return Err(Error::NonManifoldVertex {
                 vertex: *v as usize,
@@ -110,23 +145,18 @@ impl TriMesh {
                 boundary_edges: report.boundary_edges,
             });
         }
-        Ok(report)
+        Ok(())
     }
 
     /// Counts boundary/non-manifold edges and vertices, components and loops without failing.
     pub fn topology_report(&self) -> ValidationReport {
-        let topo = EdgeTopology::new(self);
-        let mut boundary_edges = 0;
-        let mut non_manifold_edges = 0;
-        for (a, b, c) in topo.undirected_edges() {
-            let same_dir = topo.faces_of_directed(a, b).count() > 1
-                || topo.faces_of_directed(b, a).count() > 1;
-            if c == 1 {
-                boundary_edges += 1;
-            } else if c > 2 || same_dir {
-                non_manifold_edges += 1;
-            }
-        }
+        self.topology_report_of(&EdgeTopology::new(self))
+    }
+
+    /// [`TriMesh::topology_report`] from an already built topology of this mesh.
+    pub fn topology_report_of(&self, topo: &EdgeTopology) -> ValidationReport {
+        let (boundary_edges, non_manifold_edges, components) =
+            super::topology::edge_and_component_counts(topo, self.triangles.len());
         let mut used = vec![false; self.positions.len()];
         for t in &self.triangles {
             for &v in t {
@@ -135,9 +165,10 @@ impl TriMesh {
                 }
             }
         }
-        let (_, components) = super::topology::connected_components_of(&topo, self.triangles.len());
-        let loops = if non_manifold_edges == 0 {
-            super::topology::boundary_loops_of(&topo).len()
+        // Without non-manifold edges, a boundary half-edge (no reverse partner) is exactly a
+        // boundary edge: no boundary edge, no loop.
+        let loops = if non_manifold_edges == 0 && boundary_edges > 0 {
+            super::topology::boundary_loops_of(topo).len()
         } else {
             0
         };
@@ -146,7 +177,7 @@ impl TriMesh {
             faces: self.triangles.len(),
             boundary_edges,
             non_manifold_edges,
-            non_manifold_vertices: non_manifold_vertices(self).len(),
+            non_manifold_vertices: non_manifold_vertices_of(self, topo).len(),
             unused_vertices: used.iter().filter(|u| !**u).count(),
             components,
             boundary_loops: loops,
@@ -156,43 +187,35 @@ impl TriMesh {
 
 /// Vertices whose incident faces form more than one edge-connected fan, sorted.
 pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
-    let n = mesh.positions.len();
-    // Corners grouped by vertex (counting sort; faces in order within a vertex):
-    // (vertex, face, the two other vertices).
-    let mut start = vec![0usize; n + 1];
-    for t in &mesh.triangles {
-        for &v in t {
-            if (v as usize) < n {
-                start[v as usize + 1] += 1;
-            }
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut corners: Vec<(u32, u32, u32, u32)> = vec![(0, 0, 0, 0); start[n]];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let v = t[k] as usize;
-            if v < n {
-                corners[start[v]] = (t[k], f as u32, t[(k + 1) % 3], t[(k + 2) % 3]);
-                start[v] += 1;
-            }
-        }
-    }
+    non_manifold_vertices_of(mesh, &EdgeTopology::new(mesh))
+}
+
+/// [`non_manifold_vertices`] from an already built topology of `mesh`. A vertex's corners are
+/// its leaving half-edges `v → next` (face `f`, whose third corner is `prev`); two corners are
+/// in one fan when they share a neighbour vertex (an edge through `v`), transitively.
+pub fn non_manifold_vertices_of(mesh: &TriMesh, topo: &EdgeTopology) -> Vec<u32> {
     let mut out = Vec::new();
+    let mut prev: Vec<u32> = Vec::new();
     let mut parent: Vec<usize> = Vec::new();
     let mut nb: Vec<(u32, usize)> = Vec::new();
-    let mut i = 0;
-    while i < corners.len() {
-        let v = corners[i].0;
-        let mut j = i;
-        while j < corners.len() && corners[j].0 == v {
-            j += 1;
+    for v in 0..mesh.positions.len() as u32 {
+        let block = topo.leaving(v);
+        if block.is_empty() {
+            continue;
         }
-        let fan = &corners[i..j];
-        // Union faces of the fan that share a neighbour vertex (= share an edge through v).
-        let m = fan.len();
+        prev.clear();
+        for &(_, b, f) in block {
+            let t = mesh.triangles[f as usize];
+            let k = (0..3)
+                .find(|&k| t[k] == v && t[(k + 1) % 3] == b)
+                .unwrap_or(0);
+            prev.push(t[(k + 2) % 3]);
+        }
+        if one_cycle(block, &prev) {
+            continue;
+        }
+        // General case: union the corners that share a neighbour vertex.
+        let m = block.len();
         parent.clear();
         parent.extend(0..m);
         fn find(p: &mut [usize], mut x: usize) -> usize {
@@ -203,9 +226,9 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
             x
         }
         nb.clear();
-        for (idx, c) in fan.iter().enumerate() {
-            nb.push((c.2, idx));
-            nb.push((c.3, idx));
+        for (idx, (&(_, next, _), &pv)) in block.iter().zip(&prev).enumerate() {
+            nb.push((next, idx));
+            nb.push((pv, idx));
         }
         nb.sort_unstable();
         for w in nb.windows(2) {
@@ -218,9 +241,32 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
         if roots > 1 {
             out.push(v);
         }
-        i = j;
     }
     out
+}
+
+/// A sufficient test that a vertex's corners form one fan: following each corner to the corner
+/// whose `next` is its `prev` (they share that edge) visits all of them in one cycle. `block` is
+/// sorted by `next`; any other shape (a boundary fan, a repeated `next`) answers false and is
+/// decided by the general union.
+fn one_cycle(block: &[(u32, u32, u32)], prev: &[u32]) -> bool {
+    let m = block.len();
+    if block.windows(2).any(|w| w[0].1 == w[1].1) {
+        return false;
+    }
+    let mut cur = 0usize;
+    for step in 1..=m {
+        let p = prev[cur];
+        let j = block.partition_point(|e| e.1 < p);
+        if j >= m || block[j].1 != p {
+            return false;
+        }
+        cur = j;
+        if cur == 0 {
+            return step == m;
+        }
+    }
+    false
 }
 
 #[cfg(test)]

@@ -38,7 +38,17 @@ pub struct RefCurve {
     s: Vec<f64>,
     /// Length of the curve (the chart's period, mm).
     pub length: f64,
+    /// Per run of [`BLOCK`] consecutive segments: a ball (center, radius) holding them, to skip
+    /// runs that cannot hold the closest point in [`RefCurve::locate`].
+    blocks: Vec<(DVec3, f64)>,
 }
+
+/// Segments per bounding ball of [`RefCurve`].
+const BLOCK: usize = 16;
+
+/// Slack (mm) on a ball's distance bound: far above rounding error at tooth scale, so a skipped
+/// segment's computed distance is certainly above the best one.
+const BOUND_SLACK: f64 = 1e-9;
 
 impl RefCurve {
     /// The reference curve of `pts` (closed, counter-clockwise about `frame`'s axis).
@@ -74,13 +84,40 @@ impl RefCurve {
                 t.cross(frame.axis).normalize_or_zero()
             })
             .collect();
+        let blocks = (0..n)
+            .step_by(BLOCK)
+            .map(|i0| {
+                // The run's segments i0..i1 use vertices i0..=i1 (wrapping).
+                let i1 = (i0 + BLOCK).min(n);
+                let vs = || (i0..=i1).map(|i| hp[i % n]);
+                let c = vs().fold(DVec3::ZERO, |acc, p| acc + p) / (i1 - i0 + 1) as f64;
+                let r = vs().map(|p| (p - c).length()).fold(0.0, f64::max);
+                (c, r)
+            })
+            .collect();
         Ok(Self {
             frame: *frame,
             pts: hp,
             normals,
             s,
             length,
+            blocks,
         })
+    }
+
+    /// Squared distance from `q` to segment `i` and the closest point's parameter on it.
+    #[inline]
+    fn segment_distance(&self, q: DVec3, i: usize) -> (f64, f64) {
+        let n = self.pts.len();
+        let (a, b) = (self.pts[i], self.pts[(i + 1) % n]);
+        let e = b - a;
+        let l2 = e.length_squared();
+        let t = if l2 > 0.0 {
+            ((q - a).dot(e) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        ((a + t * e - q).length_squared(), t)
     }
 
     /// Chart `x` and signed offset of `p`'s horizontal projection.
@@ -88,20 +125,29 @@ impl RefCurve {
         let d = p - self.frame.center;
         let q = d - d.dot(self.frame.axis) * self.frame.axis;
         let n = self.pts.len();
+        // The first segment (lowest index) of least squared distance, as a scan of all of them
+        // finds it; runs whose bounding ball is farther than an already computed distance
+        // (`bound`: first from the run of nearest ball) cannot hold it and are skipped.
+        let lower = |&(c, r): &(DVec3, f64)| (q - c).length() - r - BOUND_SLACK;
+        let nearest = (0..self.blocks.len())
+            .min_by(|&a, &b| lower(&self.blocks[a]).total_cmp(&lower(&self.blocks[b])))
+            .unwrap_or(0);
+        let mut bound = (nearest * BLOCK..((nearest + 1) * BLOCK).min(n))
+            .map(|i| self.segment_distance(q, i).0)
+            .fold(f64::INFINITY, f64::min);
         let mut best = (f64::INFINITY, 0usize, 0.0);
-        for i in 0..n {
-            let (a, b) = (self.pts[i], self.pts[(i + 1) % n]);
-            let e = b - a;
-            let l2 = e.length_squared();
-            let t = if l2 > 0.0 {
-                ((q - a).dot(e) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let d2 = (a + t * e - q).length_squared();
-            if d2 < best.0 {
-                best = (d2, i, t);
+        for (k, ball) in self.blocks.iter().enumerate() {
+            let l = lower(ball);
+            if l > 0.0 && l * l > bound {
+                continue;
             }
+            for i in k * BLOCK..((k + 1) * BLOCK).min(n) {
+                let (d2, t) = self.segment_distance(q, i);
+                if d2 < best.0 {
+                    best = (d2, i, t);
+                }
+            }
+            bound = bound.min(best.0);
         }
         let (_, i, t) = best;
         let j = (i + 1) % n;
@@ -409,6 +455,63 @@ mod tests {
                 DVec3::new(r * a.cos(), r * a.sin(), z + wobble * (7.0 * a).sin())
             })
             .collect()
+    }
+
+    /// `locate`'s choice by a scan of every segment (what the ball skipping must reproduce).
+    fn locate_by_scan(c: &RefCurve, p: DVec3) -> (f64, f64) {
+        let d = p - c.frame.center;
+        let q = d - d.dot(c.frame.axis) * c.frame.axis;
+        let n = c.pts.len();
+        let mut best = (f64::INFINITY, 0usize, 0.0);
+        for i in 0..n {
+            let (d2, t) = c.segment_distance(q, i);
+            if d2 < best.0 {
+                best = (d2, i, t);
+            }
+        }
+        let (_, i, t) = best;
+        let j = (i + 1) % n;
+        let seg = (c.pts[j] - c.pts[i]).length();
+        let base = c.pts[i].lerp(c.pts[j], t);
+        let nrm = c.normals[i].lerp(c.normals[j], t).normalize_or_zero();
+        (c.s[i] + t * seg, (q - base).dot(nrm))
+    }
+
+    #[test]
+    fn locate_skipping_equals_full_scan() {
+        let f = ToothFrame::new(DVec3::new(0.3, -0.2, 1.0), DVec3::new(0.1, 0.2, 1.0));
+        let mut x = 99u64;
+        let mut rnd = || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for (n, wobble) in [(3, 0.0), (17, 0.3), (40, 0.0), (333, 0.2), (401, 0.05)] {
+            // Radially wobbled (non-convex for the larger wobbles), tilted by the frame.
+            let pts: Vec<DVec3> = circle(3.0, 0.5, n, wobble)
+                .into_iter()
+                .map(|p| {
+                    let a = p.y.atan2(p.x);
+                    let k = 1.0 + wobble * (5.0 * a).sin();
+                    f.center + (p.x * k) * f.e1 + (p.y * k) * f.e2 + p.z * f.axis
+                })
+                .collect();
+            let c = RefCurve::new(&f, &pts).unwrap();
+            // Random points near and far, the exact center (all segments nearly tied) and the
+            // curve's own vertices and midpoints (ties between neighbouring segments).
+            let mut qs: Vec<DVec3> = (0..400)
+                .map(|_| f.center + DVec3::new(rnd(), rnd(), rnd()) * 10.0)
+                .collect();
+            qs.push(f.center);
+            qs.extend(pts.iter().copied());
+            qs.extend((0..n).map(|i| pts[i].lerp(pts[(i + 1) % n], 0.5)));
+            for q in qs {
+                let (a, b) = (c.locate(q), locate_by_scan(&c, q));
+                assert_eq!(a.0.to_bits(), b.0.to_bits(), "{q}");
+                assert_eq!(a.1.to_bits(), b.1.to_bits(), "{q}");
+            }
+        }
     }
 
     #[test]
