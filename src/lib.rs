@@ -19,6 +19,7 @@ pub mod geom;
 pub mod io;
 pub mod mesh;
 pub mod mesh_check;
+mod par;
 pub mod phantom;
 pub mod pipeline;
 pub mod register;

@@ -314,12 +314,10 @@ pub fn register(
     let mut all_fdi: Vec<u8> = ios.keys().chain(cbct.keys()).copied().collect();
     all_fdi.sort_unstable();
     all_fdi.dedup();
-    let mut teeth = BTreeMap::new();
+    let mut both = Vec::new();
     for f in all_fdi {
         match (ios.get(&f), cbct.get(&f)) {
-            (Some(i), Some(c)) => {
-                teeth.insert(f, prepare(f, i, c, opts)?);
-            }
+            (Some(i), Some(c)) => both.push((f, i, c)),
             (Some(_), None) => skipped.push(Skipped {
                 fdi: f,
                 reason: "present in the IOS only (no CBCT tooth): nothing to register it to".into(),
@@ -329,6 +327,14 @@ pub fn register(
                 reason: "present in the CBCT only (no IOS crown): no crown to register".into(),
             }),
         }
+    }
+    // Per-tooth preparation on several threads; the first error in FDI order is returned, as
+    // a sequential loop would.
+    let mut teeth = BTreeMap::new();
+    for ((f, _, _), d) in both.iter().zip(crate::par::map_ordered(&both, |(f, i, c)| {
+        prepare(*f, i, c, opts)
+    })) {
+        teeth.insert(*f, d?);
     }
     let order = crate::arch::arch_order(&teeth.keys().copied().collect::<Vec<_>>());
     timing.prepare_ms = ms(t0);
@@ -398,7 +404,7 @@ pub fn register(
     // Stage 3: fine registration, eq. (3) or the smooth-drift model.
     let t3 = Instant::now();
     let coarse_inv = coarse_t.inverse();
-    let (mut ios_to_cbct, fine_stats): (BTreeMap<u8, Rigid>, Option<BTreeMap<u8, StageStats>>) =
+    let (ios_to_cbct, fine_stats): (BTreeMap<u8, Rigid>, Option<BTreeMap<u8, StageStats>>) =
         match &opts.fine {
             FineMode::None => (order.iter().map(|&f| (f, coarse_inv)).collect(), None),
             FineMode::Sequential(o) => {
@@ -414,9 +420,9 @@ pub fn register(
 
     // Report: SD per tooth, plausibility guard, warnings.
     let t4 = Instant::now();
-    let mut out = BTreeMap::new();
-    let (mut sd_sum, mut sd_n) = (0.0, 0usize);
-    for f in &order {
+    // Per tooth on several threads (each tooth's report depends on that tooth only); the jaw's
+    // mean SD is summed in arch order afterwards, as before.
+    let per_tooth = crate::par::map_ordered(&order, |f| {
         let d = &teeth[f];
         let mut warnings = Vec::new();
         let mut m = ios_to_cbct[f];
@@ -444,7 +450,6 @@ pub fn register(
             if opts.guard.reject_implausible {
                 m = coarse_inv;
                 fine_correction = 0.0;
-                ios_to_cbct.insert(*f, m);
             }
         } else if fine_stats.is_some() && fine_correction > opts.guard.flag_correction_mm {
             warnings.push(format!(
@@ -465,8 +470,7 @@ pub fn register(
             .filter(|&&x| x <= opts.inlier_distance_mm)
             .count() as f64
             / nd;
-        sd_sum += dist.iter().sum::<f64>();
-        sd_n += dist.len();
+        let dist_sum = dist.iter().sum::<f64>();
         if sd > opts.guard.max_sd_mm {
             warnings.push(format!(
                 "surface distance {sd:.3} mm exceeds {:.3} mm: CBCT artefact (metal?) or misregistration",
@@ -508,8 +512,9 @@ pub fn register(
             OutputFrame::Cbct => (Rigid::IDENTITY, m),
             OutputFrame::Ios => (cbct_to_ios, Rigid::IDENTITY),
         };
-        out.insert(
-            *f,
+        (
+            dist_sum,
+            dist.len(),
             ToothRegistration {
                 fdi: *f,
                 cbct_to_ios,
@@ -523,7 +528,14 @@ pub fn register(
                 fine_correction_mm: fine_correction,
                 warnings,
             },
-        );
+        )
+    });
+    let mut out = BTreeMap::new();
+    let (mut sd_sum, mut sd_n) = (0.0, 0usize);
+    for (f, (dist_sum, n, reg)) in order.iter().zip(per_tooth) {
+        sd_sum += dist_sum;
+        sd_n += n;
+        out.insert(*f, reg);
     }
     timing.report_ms = ms(t4);
     timing.total_ms = ms(t0);
