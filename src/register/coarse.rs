@@ -19,26 +19,30 @@ pub(crate) struct CoarseResult {
     pub stats: StageStats,
 }
 
-/// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS).
+/// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS), tooth by tooth
+/// in FDI order (the teeth's correspondences on several threads, concatenated in that order).
 fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, level: Level, o: &StageOptions) -> Vec<Pair> {
     let inv = t.inverse();
-    let mut out = Vec::new();
-    for d in teeth.values() {
-        for &k in d.ios_indices(level) {
-            let y = d.ios_points[k];
-            let sp = match o.correspondence {
-                Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
-                Correspondence::ClosestPoint => d.cbct.closest_point(inv.apply(y)),
-            };
-            out.push(Pair {
-                p: t.apply(sp.point),
-                q: y,
-                n: t.apply_vector(sp.normal),
-                n_other: d.ios_normals[k],
-            });
-        }
-    }
-    out
+    let ds: Vec<&ToothData> = teeth.values().collect();
+    let per_tooth = crate::par::map_ordered(&ds, |d| {
+        d.ios_indices(level)
+            .iter()
+            .map(|&k| {
+                let y = d.ios_points[k];
+                let sp = match o.correspondence {
+                    Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
+                    Correspondence::ClosestPoint => d.cbct.closest_point(inv.apply(y)),
+                };
+                Pair {
+                    p: t.apply(sp.point),
+                    q: y,
+                    n: t.apply_vector(sp.normal),
+                    n_other: d.ios_normals[k],
+                }
+            })
+            .collect::<Vec<_>>()
+    });
+    per_tooth.concat()
 }
 
 /// Runs eq. (2) from the initial transform `init` (CBCT → IOS).

@@ -84,20 +84,24 @@ pub(crate) fn fine_smooth(
             let dim = 7 * n;
             let mut a = DMatrix::<f64>::zeros(dim, dim);
             let mut g = DVector::<f64>::zeros(dim);
-            for (k, f) in order.iter().enumerate() {
-                let pr = group_pairs(
+            // The teeth's correspondences on several threads; everything summed in arch order.
+            let all_pairs = crate::par::map_ordered(order, |f| {
+                group_pairs(
                     teeth,
                     std::slice::from_ref(f),
                     &ios_to_cbct,
                     pass.level,
                     o,
                     o.source_normals,
-                );
-                let w = weights(&pr, -offs[k], &o.weights);
+                )
+            });
+            for ((k, f), pr) in order.iter().enumerate().zip(&all_pairs) {
+                let pr = pr.as_slice();
+                let w = weights(pr, -offs[k], &o.weights);
                 let mut ne = Normal7::new();
                 // Linearised about the current pose: the step is applied after the current
                 // correction, and added to the accumulated twist (small-angle composition).
-                ne.add_pairs(&pr, &w, center, -offs[k]);
+                ne.add_pairs(pr, &w, center, -offs[k]);
                 let s = 1.0 / ne.wsum.max(1e-12);
                 let st = stats.get_mut(f).expect("tooth in order");
                 st.rms_mm = (ne.rr * s).sqrt();
