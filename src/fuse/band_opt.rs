@@ -47,6 +47,16 @@ impl EdgeFaces {
 /// every face that can hold an edge between two band vertices (the band faces and every face
 /// touching a loop vertex): a flip must not create an edge that exists. Returns the flips made.
 fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) -> usize {
+    flip_pass_where(mesh, band, faces, |_, _, _| true)
+}
+
+/// [`flip_pass`] over the edges whose two faces `consider(f, g)` accepts.
+fn flip_pass_where(
+    mesh: &mut TriMesh,
+    band: std::ops::Range<usize>,
+    faces: &[usize],
+    consider: impl Fn(&TriMesh, usize, usize) -> bool,
+) -> usize {
     // Edge → its faces in `faces` order (the first two, and how many). A hash map for lookups
     // only: the edges are visited in sorted order, so the result does not depend on hashing.
     let mut edges: HashMap<(u32, u32), EdgeFaces> = HashMap::with_capacity(faces.len() * 2);
@@ -67,6 +77,9 @@ fn flip_pass(mesh: &mut TriMesh, band: std::ops::Range<usize>, faces: &[usize]) 
             }
             _ => continue,
         };
+        if !consider(mesh, f, g) {
+            continue;
+        }
         let (tf, tg) = (mesh.triangles[f], mesh.triangles[g]);
         // Rotate so tf = (a, b, c) with directed edge a→b the shared edge; tg has b→a.
         let Some(kf) = (0..3).find(|&k| key(tf[k], tf[(k + 1) % 3]) == e) else {
@@ -209,15 +222,7 @@ pub fn optimize_band(
 /// fast, keeps the mesh closed and manifold, and refuses flips that fold (see [`flip_pass`]).
 /// Returns the number of flips.
 pub fn flip_band(mesh: &mut TriMesh, band: std::ops::Range<usize>, passes: usize) -> usize {
-    let mut on_band = vec![false; mesh.positions.len()];
-    for f in band.clone() {
-        for v in mesh.triangles[f] {
-            on_band[v as usize] = true;
-        }
-    }
-    let faces: Vec<usize> = (0..mesh.triangles.len())
-        .filter(|&f| band.contains(&f) || mesh.triangles[f].iter().any(|&v| on_band[v as usize]))
-        .collect();
+    let faces = flip_faces(mesh, band.clone());
     let mut total = 0;
     for _ in 0..passes {
         let n = flip_pass(mesh, band.clone(), &faces);
@@ -227,4 +232,40 @@ pub fn flip_band(mesh: &mut TriMesh, band: std::ops::Range<usize>, passes: usize
         }
     }
     total
+}
+
+/// Flips only edges of band faces with exactly collinear corners (zero area), each to the
+/// neighbour across it that makes both new faces better (the same fold-refusing rule as
+/// [`flip_band`]); for presets without the band flips (the paper's), whose point clouds can put
+/// three band vertices on a line. Returns the number of flips.
+pub fn fix_degenerate_band(mesh: &mut TriMesh, band: std::ops::Range<usize>) -> usize {
+    let flat = |m: &TriMesh, f: usize| crate::mesh_check::is_degenerate(m, f);
+    if !band.clone().any(|f| flat(mesh, f)) {
+        return 0;
+    }
+    let faces = flip_faces(mesh, band.clone());
+    let mut total = 0;
+    for _ in 0..4 {
+        let n = flip_pass_where(mesh, band.clone(), &faces, |m, f, g| {
+            flat(m, f) || flat(m, g)
+        });
+        total += n;
+        if n == 0 {
+            break;
+        }
+    }
+    total
+}
+
+/// The band faces and every face touching a band vertex (see [`flip_pass`]).
+fn flip_faces(mesh: &TriMesh, band: std::ops::Range<usize>) -> Vec<usize> {
+    let mut on_band = vec![false; mesh.positions.len()];
+    for f in band.clone() {
+        for v in mesh.triangles[f] {
+            on_band[v as usize] = true;
+        }
+    }
+    (0..mesh.triangles.len())
+        .filter(|&f| band.contains(&f) || mesh.triangles[f].iter().any(|&v| on_band[v as usize]))
+        .collect()
 }

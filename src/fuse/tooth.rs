@@ -326,6 +326,8 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         super::band_opt::optimize_band(&mut mesh, band_start..band_end, band_off..root_off);
     } else if opts.stitch.flips {
         super::band_opt::flip_band(&mut mesh, band_start..band_end, 6);
+    } else {
+        super::band_opt::fix_degenerate_band(&mut mesh, band_start..band_end);
     }
     if opts.stitch.untangle {
         super::untangle::untangle_band(&mut mesh, band_start..band_end, band_off..root_off, 5.0);

@@ -29,11 +29,14 @@ pub fn self_intersections(mesh: &TriMesh) -> Vec<(u32, u32)> {
 /// Number of degenerate faces: repeated index or exactly zero area (exactly collinear corners).
 pub fn degenerate_faces(mesh: &TriMesh) -> usize {
     (0..mesh.triangles.len())
-        .filter(|&f| {
-            let t = mesh.triangles[f];
-            t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || tri_tri::is_collinear(mesh, f)
-        })
+        .filter(|&f| is_degenerate(mesh, f))
         .count()
+}
+
+/// Whether face `f` repeats a vertex index or has exactly collinear corners (exact test).
+pub fn is_degenerate(mesh: &TriMesh, f: usize) -> bool {
+    let t = mesh.triangles[f];
+    t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || tri_tri::is_collinear(mesh, f)
 }
 
 #[cfg(test)]
