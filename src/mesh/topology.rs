@@ -120,15 +120,7 @@ impl EdgeTopology {
             }
             let same = j - i;
             let rev = self.faces_of_directed(b, a).count();
-            // The undirected edge is counted once: from its smaller end, or from this end when
-            // the other direction is absent (as `undirected_edges` lists it).
-            if a < b || rev == 0 {
-                if same + rev == 1 {
-                    boundary += 1;
-                } else if same + rev > 2 || same > 1 || rev > 1 {
-                    non_manifold += 1;
-                }
-            }
+            count_edge(a, b, same, rev, &mut boundary, &mut non_manifold);
             i = j;
         }
         (boundary, non_manifold)
@@ -234,13 +226,7 @@ pub fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usiz
                 }
             }
         }
-        if a < b || rev == 0 {
-            if same + rev == 1 {
-                boundary += 1;
-            } else if same + rev > 2 || same > 1 || rev > 1 {
-                non_manifold += 1;
-            }
-        }
+        count_edge(a, b, same, rev, &mut boundary, &mut non_manifold);
         i = j;
     }
     let components = parent
@@ -294,6 +280,26 @@ fn face_union(topo: &EdgeTopology, nf: usize) -> Vec<u32> {
         }
     }
     parent
+}
+
+/// Counts the undirected edge `a`–`b` with `same` half-edges a→b and `rev` half-edges b→a as a
+/// boundary or non-manifold edge. Counted once: from its smaller end, or from this end when the
+/// other direction is absent (as [`EdgeTopology::undirected_edges`] lists it).
+fn count_edge(
+    a: u32,
+    b: u32,
+    same: usize,
+    rev: usize,
+    boundary: &mut usize,
+    non_manifold: &mut usize,
+) {
+    if a < b || rev == 0 {
+        if same + rev == 1 {
+            *boundary += 1;
+        } else if same + rev > 2 || same > 1 || rev > 1 {
+            *non_manifold += 1;
+        }
+    }
 }
 
 #[cfg(test)]
