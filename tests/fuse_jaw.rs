@@ -162,6 +162,16 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
             self_intersections: q.self_intersections.unwrap_or(0),
             added_intersections: added_intersections(f),
         };
+        // What the untangling could not fix is reported to the host, never silent.
+        if preset == Preset::Default && acc.added_intersections > 0 {
+            assert!(
+                f.warnings
+                    .iter()
+                    .any(|w| w.contains("left after untangling")),
+                "{tag}: tooth {fdi}: {:?}",
+                f.warnings
+            );
+        }
         println!(
             "{tag}: tooth {fdi}: crown mean {:.4} mm (CBCT-only {:.4}), band max {:.3} mm (loops {:.3}), band min angle {:.1}°, intersecting pairs {}, metal {}",
             acc.fused_crown_mean,

@@ -330,7 +330,18 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         super::band_opt::fix_degenerate_band(&mut mesh, band_start..band_end);
     }
     if opts.stitch.untangle {
-        super::untangle::untangle_band(&mut mesh, band_start..band_end, band_off..root_off, 5.0);
+        let u = super::untangle::untangle_band(
+            &mut mesh,
+            band_start..band_end,
+            band_off..root_off,
+            5.0,
+        );
+        if u.crossings_after > 0 {
+            warnings.push(format!(
+                "{} intersecting face pairs with a band face left after untangling ({} before)",
+                u.crossings_after, u.crossings_before
+            ));
+        }
     }
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
     q.crown_vertices = ct.kept_ios;
