@@ -11,8 +11,8 @@ use crate::mesh_check;
 use glam::DVec3;
 use std::collections::HashMap;
 
-/// Smallest angle (degrees) of a triangle given by corner positions.
-fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+/// Smallest angle (degrees) of a triangle given by corner positions (0 for a degenerate one).
+pub(super) fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let [x, y, z] = triangle_angles(a, b, c);
     let m = x.min(y).min(z);
     if m.is_finite() { m } else { 0.0 }

@@ -7,6 +7,7 @@
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
 //! vertices (IOS margin, CBCT cut) never move.
 
+use super::band_opt::min_angle;
 use crate::mesh::TriMesh;
 use crate::mesh_check::{TriangleGrid, triangles_intersect};
 use glam::DVec3;
@@ -40,14 +41,6 @@ const SPHERE: [(f64, f64, f64); 14] = [
     (-1.0, -1.0, 1.0),
     (-1.0, -1.0, -1.0),
 ];
-
-fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let ang = |p: DVec3, q: DVec3, r: DVec3| (q - p).angle_between(r - p);
-    ang(a, b, c)
-        .min(ang(b, c, a))
-        .min(ang(c, a, b))
-        .to_degrees()
-}
 
 /// Whether a corner angle of `a, b, c` is under the angle whose cosine is `cos_limit` (no
 /// inverse cosine: the test runs on every band face).
@@ -159,68 +152,6 @@ fn near_grid(mesh: &TriMesh, band: Range<usize>, scale: f64) -> TriangleGrid {
     TriangleGrid::over(mesh, &near, 2.0 * scale)
 }
 
-/// Band faces binned by the cells (of a grid over the band's region) their boxes overlap, with
-/// a per-cell occupancy table so that faces far from the band are rejected without a search.
-struct BandBins {
-    origin: DVec3,
-    cell: f64,
-    dims: [i64; 3],
-    occupied: Vec<bool>,
-    /// `(cell id, band face)`, sorted.
-    entries: Vec<(u64, u32)>,
-}
-
-impl BandBins {
-    fn new(boxes: &[(DVec3, DVec3)], first: usize, region: (DVec3, DVec3), cell: f64) -> Self {
-        let ext = (region.1 - region.0).max(DVec3::splat(1e-9));
-        // At most ~2 million cells.
-        let cell = cell.max((ext.x * ext.y * ext.z / 2.0e6).cbrt()).max(1e-6);
-        let dims = [ext.x, ext.y, ext.z].map(|e| (e / cell).floor() as i64 + 1);
-        let mut b = BandBins {
-            origin: region.0,
-            cell,
-            dims,
-            occupied: vec![false; (dims[0] * dims[1] * dims[2]) as usize],
-            entries: Vec::new(),
-        };
-        for (k, bx) in boxes.iter().enumerate() {
-            let (il, ih) = b.range(*bx);
-            for z in il[2]..=ih[2] {
-                for y in il[1]..=ih[1] {
-                    for x in il[0]..=ih[0] {
-                        let id = b.id([x, y, z]);
-                        b.occupied[id as usize] = true;
-                        b.entries.push((id, (first + k) as u32));
-                    }
-                }
-            }
-        }
-        b.entries.sort_unstable();
-        b
-    }
-
-    fn range(&self, bx: (DVec3, DVec3)) -> ([i64; 3], [i64; 3]) {
-        let idx = |p: DVec3| {
-            let q = (p - self.origin) / self.cell;
-            let c = [q.x, q.y, q.z];
-            [0, 1, 2].map(|k| (c[k].floor() as i64).clamp(0, self.dims[k] - 1))
-        };
-        (idx(bx.0), idx(bx.1))
-    }
-
-    fn id(&self, i: [i64; 3]) -> u64 {
-        ((i[2] * self.dims[1] + i[1]) * self.dims[0] + i[0]) as u64
-    }
-
-    fn in_cell(&self, id: u64) -> impl Iterator<Item = u32> + '_ {
-        let s = self.entries.partition_point(|&(c, _)| c < id);
-        self.entries[s..]
-            .iter()
-            .take_while(move |&&(c, _)| c == id)
-            .map(|&(_, f)| f)
-    }
-}
-
 fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
     for f in band {
@@ -240,49 +171,20 @@ fn find_bad(
     min_angle_deg: f64,
 ) -> (usize, Vec<u32>) {
     let region = band_region(mesh, band.clone(), scale);
-    let boxes: Vec<(DVec3, DVec3)> = band.clone().map(|f| bbox(mesh, f)).collect();
-    let bins = BandBins::new(&boxes, band.start, region, 2.0 * scale);
-    let bbox_of = |f: u32| boxes[f as usize - band.start];
-    let mut pairs: Vec<(u32, u32)> = Vec::new();
-    // Band–band: faces sharing a cell.
-    let mut i = 0;
-    let e = &bins.entries;
-    while i < e.len() {
-        let mut j = i;
-        while j < e.len() && e[j].0 == e[i].0 {
-            j += 1;
-        }
-        for (k, &(_, f)) in e[i..j].iter().enumerate() {
-            for &(_, g) in &e[i + k + 1..j] {
-                if overlap(bbox_of(f), bbox_of(g)) {
-                    pairs.push((f.min(g), f.max(g)));
-                }
-            }
-        }
-        i = j;
-    }
-    // Band–other: faces in occupied cells.
+    let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
+    let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
+    // Band–band pairs, then band–other: faces in the band's cells.
+    let mut pairs = grid.candidate_pairs(mesh);
     for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
         let bg = bbox(mesh, g);
         if !overlap(bg, region) {
             continue;
         }
-        let (il, ih) = bins.range(bg);
-        for z in il[2]..=ih[2] {
-            for y in il[1]..=ih[1] {
-                for x in il[0]..=ih[0] {
-                    let id = bins.id([x, y, z]);
-                    if !bins.occupied[id as usize] {
-                        continue;
-                    }
-                    for f in bins.in_cell(id) {
-                        if overlap(bbox_of(f), bg) {
-                            pairs.push((f, g as u32));
-                        }
-                    }
-                }
+        grid.for_each_in_box(bg.0, bg.1, |f| {
+            if overlap(bbox(mesh, f as usize), bg) {
+                pairs.push((f, g as u32));
             }
-        }
+        });
     }
     pairs.sort_unstable();
     pairs.dedup();

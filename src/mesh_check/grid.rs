@@ -16,6 +16,9 @@ pub struct TriangleGrid {
     pub dims: [i64; 3],
     /// `(cell id, face)`, sorted.
     entries: Vec<(u64, u32)>,
+    /// One bit per cell: whether any face is binned there (lets a query skip empty cells
+    /// without a search).
+    occupied: Vec<u64>,
 }
 
 impl TriangleGrid {
@@ -29,8 +32,15 @@ impl TriangleGrid {
     /// Like [`TriangleGrid::new`], over the faces `faces` of `mesh` only (the grid spans all
     /// of `mesh`'s vertices).
     pub fn over(mesh: &TriMesh, faces: &[u32], cell: f64) -> Self {
-        let (lo, hi) =
+        let region =
             crate::geom::bounding_box(&mesh.positions).unwrap_or((DVec3::ZERO, DVec3::ZERO));
+        Self::over_region(mesh, faces, region, cell)
+    }
+
+    /// Like [`TriangleGrid::over`], with the grid spanning the box `region` only (faces reaching
+    /// outside it are binned in its border cells; queries outside it clamp to them too).
+    pub fn over_region(mesh: &TriMesh, faces: &[u32], region: (DVec3, DVec3), cell: f64) -> Self {
+        let (lo, hi) = region;
         let ext = (hi - lo).max(DVec3::splat(1e-9));
         let mut cell = if cell > 0.0 {
             cell
@@ -51,6 +61,7 @@ impl TriangleGrid {
             cell,
             dims,
             entries: Vec::new(),
+            occupied: vec![0; ((dims[0] * dims[1] * dims[2]) as usize).div_ceil(64)],
         };
         for &f in faces {
             let [a, b, c] = mesh.corners(f as usize);
@@ -59,7 +70,9 @@ impl TriangleGrid {
             for z in il[2]..=ih[2] {
                 for y in il[1]..=ih[1] {
                     for x in il[0]..=ih[0] {
-                        g.entries.push((g.id([x, y, z]), f));
+                        let id = g.id([x, y, z]);
+                        g.occupied[(id / 64) as usize] |= 1 << (id % 64);
+                        g.entries.push((id, f));
                     }
                 }
             }
@@ -93,18 +106,27 @@ impl TriangleGrid {
     /// The binned faces sharing a cell with the box `[lo, hi]`, sorted and unique (a superset
     /// of the faces whose bounding boxes overlap it).
     pub fn faces_in_box(&self, lo: DVec3, hi: DVec3) -> Vec<u32> {
-        let (il, ih) = (self.index_of(lo), self.index_of(hi));
         let mut out = Vec::new();
-        for z in il[2]..=ih[2] {
-            for y in il[1]..=ih[1] {
-                for x in il[0]..=ih[0] {
-                    out.extend(self.faces_in(self.id([x, y, z])));
-                }
-            }
-        }
+        self.for_each_in_box(lo, hi, |f| out.push(f));
         out.sort_unstable();
         out.dedup();
         out
+    }
+
+    /// Calls `visit` for every binned face in each cell the box `[lo, hi]` meets (a face in
+    /// several of those cells is visited once per cell); empty cells cost no search.
+    pub fn for_each_in_box(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(u32)) {
+        let (il, ih) = (self.index_of(lo), self.index_of(hi));
+        for z in il[2]..=ih[2] {
+            for y in il[1]..=ih[1] {
+                for x in il[0]..=ih[0] {
+                    let id = self.id([x, y, z]);
+                    if self.occupied[(id / 64) as usize] & (1 << (id % 64)) != 0 {
+                        self.faces_in(id).for_each(&mut visit);
+                    }
+                }
+            }
+        }
     }
 
     /// Face pairs `(f, g)`, `f < g`, sharing at least one cell and with overlapping bounding
@@ -187,5 +209,60 @@ impl TriangleGrid {
             }
         }
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A strip of small triangles: the faces a box query visits are a superset of those whose
+    /// boxes overlap it, for a grid over the whole mesh and over a sub-region alike, and the
+    /// region grid's pairs are exactly the overlapping pairs among its faces.
+    #[test]
+    fn region_grid_queries_find_every_overlapping_face() {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..40 {
+            let x = i as f64 * 0.1;
+            let z = (i as f64 * 0.7).sin() * 0.05;
+            positions.push(DVec3::new(x, 0.0, z));
+            positions.push(DVec3::new(x + 0.05, 0.12, -z));
+            if i > 0 {
+                let (a, b, c, d) = (2 * i - 2, 2 * i - 1, 2 * i, 2 * i + 1);
+                triangles.push([a as u32, c as u32, b as u32]);
+                triangles.push([b as u32, c as u32, d as u32]);
+            }
+        }
+        let mesh = TriMesh::new(positions, triangles);
+        let bb = |f: usize| {
+            let [a, b, c] = mesh.corners(f);
+            (a.min(b).min(c), a.max(b).max(c))
+        };
+        let ov =
+            |p: (DVec3, DVec3), q: (DVec3, DVec3)| p.0.cmple(q.1).all() && q.0.cmple(p.1).all();
+        let sub: Vec<u32> = (20..50).collect();
+        let region = (DVec3::new(0.9, -0.1, -0.1), DVec3::new(2.6, 0.3, 0.1));
+        let g = TriangleGrid::over_region(&mesh, &sub, region, 0.07);
+        for q in 0..mesh.triangles.len() {
+            let mut seen = Vec::new();
+            let (lo, hi) = bb(q);
+            g.for_each_in_box(lo, hi, |f| seen.push(f));
+            for &f in &sub {
+                if ov(bb(f as usize), (lo, hi)) {
+                    assert!(seen.contains(&f), "query {q}: face {f} missed");
+                }
+            }
+        }
+        let mut want = Vec::new();
+        for (i, &f) in sub.iter().enumerate() {
+            for &h in &sub[i + 1..] {
+                if ov(bb(f as usize), bb(h as usize)) {
+                    want.push((f, h));
+                }
+            }
+        }
+        assert!(!want.is_empty());
+        assert_eq!(g.candidate_pairs(&mesh), want);
     }
 }
