@@ -286,17 +286,8 @@ fn default_preset_strict_targets() {
 /// ten times more pairs; on clean crowns both bands add few.)
 #[test]
 fn chart_band_beats_loft_rings() {
-    let p = match Phantom::generate(&PhantomOptions {
-        seed: 3,
-        jaw: Jaw::Upper,
-        variant: Variant::Full,
-        ..Default::default()
-    }) {
-        Ok(p) => p,
-        Err(e) => {
-            println!("SKIPPED: phantom unavailable ({e})");
-            return;
-        }
+    let Some(p) = phantom_or_skip(3, Jaw::Upper, Variant::Full) else {
+        return;
     };
     let transforms: BTreeMap<u8, ToothTransforms> = toothfuse::eval::true_transforms(&p);
     let measure = |points: PointGeneration| {
@@ -341,17 +332,8 @@ fn chart_band_beats_loft_rings() {
 /// 1.7° and 4.0°; with it no tooth gets either).
 #[test]
 fn untangling_removes_crossings_and_slivers() {
-    let p = match Phantom::generate(&PhantomOptions {
-        seed: 9,
-        jaw: Jaw::Lower,
-        variant: Variant::MetalArtefact,
-        ..Default::default()
-    }) {
-        Ok(p) => p,
-        Err(e) => {
-            println!("SKIPPED: phantom unavailable ({e})");
-            return;
-        }
+    let Some(p) = phantom_or_skip(9, Jaw::Lower, Variant::MetalArtefact) else {
+        return;
     };
     let transforms = toothfuse::eval::true_transforms(&p);
     let measure = |untangle: bool| {
@@ -383,6 +365,22 @@ fn untangling_removes_crossings_and_slivers() {
         "{added_off} {slivers_off}"
     );
     assert_eq!((added_on, slivers_on), (0, 0));
+}
+
+/// The phantom jaw, or `None` (after saying the test is skipped) where it cannot be generated.
+fn phantom_or_skip(seed: u64, jaw: Jaw, variant: Variant) -> Option<Phantom> {
+    match Phantom::generate(&PhantomOptions {
+        seed,
+        jaw,
+        variant,
+        ..Default::default()
+    }) {
+        Ok(p) => Some(p),
+        Err(e) => {
+            println!("SKIPPED: phantom unavailable ({e})");
+            None
+        }
+    }
 }
 
 /// Intersecting face pairs of a fused tooth that the fusion added: pairs where at least one face
