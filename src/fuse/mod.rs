@@ -3,6 +3,7 @@
 //! fused teeth in one mesh with per-vertex FDI labels and sources.
 
 mod band_opt;
+pub mod fringe;
 mod jaw;
 pub mod quality;
 mod tooth;
@@ -64,6 +65,9 @@ pub struct FuseOptions {
     pub cut: CutOptions,
     /// Stitching.
     pub stitch: StitchOptions,
+    /// Geodesic reach (mm) from the IOS margin within which crown faces that fold over other
+    /// crown faces, or that the band cannot clear, are trimmed ([`fringe`]); 0 trims nothing.
+    pub fringe_reach_mm: f64,
     /// Count intersecting face pairs in the quality report (exact test; costs time).
     pub check_self_intersections: bool,
     /// Put teeth present only in the CBCT into the jaw output unfused (flagged in
@@ -94,12 +98,14 @@ impl FuseOptions {
                     flips: false,
                     untangle: false,
                 },
+                fringe_reach_mm: 0.0,
                 check_self_intersections: false,
                 pass_through_cbct_only: false,
             },
             Preset::Default => FuseOptions {
                 cut: CutOptions::default(),
                 stitch: StitchOptions::default(),
+                fringe_reach_mm: 0.3,
                 check_self_intersections: false,
                 pass_through_cbct_only: false,
             },

@@ -40,6 +40,9 @@ pub struct ToothQuality {
     pub crown_vertices: usize,
     /// Small crown holes filled.
     pub holes_filled: usize,
+    /// IOS crown vertices trimmed from the margin fringe (folded over other crown faces, or
+    /// crossed by the band; all within the fringe reach of the original margin).
+    pub ios_vertices_trimmed: usize,
     /// CBCT faces removed by the crown cut.
     pub cbct_faces_removed: usize,
 }

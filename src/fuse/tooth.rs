@@ -23,6 +23,9 @@ pub struct FusedTooth {
     /// Per vertex of `mesh`: the index of the IOS crown input vertex it is (its position is
     /// bitwise `ios_to_output.apply(input)`), or `u32::MAX` for band, fill and CBCT vertices.
     pub ios_vertex: Vec<u32>,
+    /// Faces of `mesh`: the crown's first (`0..band_faces.start`), then the band's
+    /// (`band_faces`), then the root's.
+    pub band_faces: std::ops::Range<usize>,
     /// Quality report.
     pub quality: ToothQuality,
     /// Warnings (filled holes, flipped input orientation, self-intersections).
@@ -47,6 +50,8 @@ pub struct CutTooth {
     ios_vertex: Vec<u32>,
     kept_ios: usize,
     holes_filled: usize,
+    trimmed: super::fringe::FringeTrim,
+    dist_in: Vec<f64>,
     root: RootCut,
     root_dirs: Vec<DVec3>,
     chords: Vec<(BandVertex, BandVertex)>,
@@ -177,6 +182,32 @@ fn cut_inner(
         warnings.push(format!("IOS crown repaired: {rep:?}"));
     }
     let mut crown = repaired.transformed(ios_to_output);
+    let mut rep_src = rep_src;
+    let mut trimmed = super::fringe::FringeTrim::default();
+    let mut dist_in = Vec::new();
+    if opts.fringe_reach_mm > 0.0 {
+        let loops = boundary_loops(&crown);
+        if loops.len() == 1 {
+            let d = super::fringe::edge_distance(&crown, &loops[0], opts.fringe_reach_mm);
+            dist_in = vec![f64::INFINITY; ios_crown.positions.len()];
+            for (v, &s) in rep_src.iter().enumerate() {
+                if s != u32::MAX {
+                    dist_in[s as usize] = dist_in[s as usize].min(d[v]);
+                }
+            }
+            if let Some((m, map, t)) =
+                super::fringe::trim_fringe(&crown, &rep_src, &dist_in, opts.fringe_reach_mm, &[])
+            {
+                crown = m;
+                rep_src = map;
+                trimmed = t;
+                warnings.push(format!(
+                    "{} IOS crown vertices ({} faces) trimmed from the margin fringe (folded over other crown faces; at most {:.2} mm from the margin)",
+                    t.vertices, t.faces, t.max_reach_mm
+                ));
+            }
+        }
+    }
     let mut root_in = cbct.transformed(cbct_to_output);
     if root_in.signed_volume() < 0.0 {
         root_in.flip();
@@ -205,7 +236,10 @@ fn cut_inner(
     }
     let ios_vertex = rep_src;
     let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
-    let dropped = ios_crown.positions.len().saturating_sub(kept_ios);
+    let dropped = ios_crown
+        .positions
+        .len()
+        .saturating_sub(kept_ios + trimmed.vertices);
     if dropped > 0 {
         warnings.push(format!(
             "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
@@ -229,6 +263,8 @@ fn cut_inner(
         ios_vertex,
         kept_ios,
         holes_filled: rep.filled_holes,
+        trimmed,
+        dist_in,
         root: rc,
         root_dirs,
         chords,
@@ -245,12 +281,192 @@ pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     stitch_inner(cut, opts).map_err(|e| e.in_tooth(cut.fdi))
 }
 
+/// The crown side of the band: the (possibly trimmed) crown, its margin, the directions across
+/// the margin, the crown's chords and its vertices' IOS input indices.
+struct CrownSide {
+    crown: TriMesh,
+    margin: Vec<u32>,
+    dirs: Vec<DVec3>,
+    chords: Vec<(BandVertex, BandVertex)>,
+    ios_vertex: Vec<u32>,
+}
+
+/// Crown + band + root of one attempt, with what the untangling left.
+struct Assembled {
+    mesh: TriMesh,
+    source: Vec<u8>,
+    ios_vertex: Vec<u32>,
+    band: std::ops::Range<usize>,
+    untangle: Option<super::untangle::UntangleReport>,
+}
+
+/// Crown faces (indices below `band.start`) in the crossing pairs the untangling left.
+fn crown_faces_hit(a: &Assembled) -> Vec<u32> {
+    let Some(u) = &a.untangle else {
+        return Vec::new();
+    };
+    let mut v: Vec<u32> = u
+        .crossing_pairs
+        .iter()
+        .flat_map(|&(f, g)| [f, g])
+        .filter(|&f| (f as usize) < a.band.start)
+        .collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
-    let (margin, frame, rc) = (&ct.margin, &ct.frame, &ct.root);
     let mut warnings = ct.warnings.clone();
-    let mut mesh = ct.crown.clone();
-    let mut ios_vertex = ct.ios_vertex.clone();
+    let mut side = CrownSide {
+        crown: ct.crown.clone(),
+        margin: ct.margin.clone(),
+        dirs: ct.crown_dirs.clone(),
+        chords: ct
+            .chords
+            .iter()
+            .copied()
+            .filter(|c| matches!(c.0, BandVertex::Upper(_)))
+            .collect(),
+        ios_vertex: ct.ios_vertex.clone(),
+    };
+    let mut trimmed = ct.trimmed;
+    // Where the band cannot clear a crown face within the fringe, that face goes (with the faces
+    // between it and the margin) and the band is built again on the new margin.
+    let mut attempt = 0;
+    let a = loop {
+        let a = assemble(ct, &side, opts)?;
+        let hits = crown_faces_hit(&a);
+        attempt += 1;
+        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt > 3 {
+            break a;
+        }
+        let Some((crown, map, t)) = super::fringe::trim_fringe(
+            &side.crown,
+            &side.ios_vertex,
+            &ct.dist_in,
+            opts.fringe_reach_mm,
+            &hits,
+        ) else {
+            break a;
+        };
+        let margin = boundary_loops(&crown)
+            .into_iter()
+            .next()
+            .unwrap_or_default();
+        trimmed.faces += t.faces;
+        trimmed.vertices += t.vertices;
+        trimmed.max_reach_mm = trimmed.max_reach_mm.max(t.max_reach_mm);
+        trimmed.rounds += t.rounds;
+        side = CrownSide {
+            dirs: loop_dirs(&crown, &margin, ct.frame.axis),
+            chords: loop_chords(&crown, &margin, BandVertex::Upper),
+            crown,
+            margin,
+            ios_vertex: map,
+        };
+    };
+    if trimmed.vertices > ct.trimmed.vertices {
+        warnings.push(format!(
+            "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
+            trimmed.vertices - ct.trimmed.vertices
+        ));
+    }
+    if let Some(u) = a.untangle.as_ref().filter(|u| u.crossings_after > 0) {
+        warnings.push(format!(
+            "{} intersecting face pairs with a band face left after untangling ({} before)",
+            u.crossings_after, u.crossings_before
+        ));
+    }
+    let Assembled {
+        mesh,
+        source,
+        ios_vertex,
+        band,
+        ..
+    } = a;
+    let (band_start, band_end) = (band.start, band.end);
+    let rc = &ct.root;
+    let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
+    q.crown_vertices = ct.kept_ios;
+    q.holes_filled = ct.holes_filled;
+    q.ios_vertices_trimmed = trimmed.vertices;
+    q.cbct_faces_removed = rc.removed_faces;
+    if !(q.closed && q.manifold && q.components == 1) {
+        let topo = EdgeTopology::new(&mesh);
+        let bad: Vec<String> = topo
+            .undirected_edges()
+            .into_iter()
+            .filter(|&(a, b, c)| c != 2 || topo.faces_of_directed(a, b).count() != 1)
+            .take(4)
+            .map(|(a, b, c)| {
+                format!(
+                    "({a}:{}, {b}:{}) x{c}",
+                    source[a as usize], source[b as usize]
+                )
+            })
+            .collect();
+        return Err(Error::InvalidArgument(format!(
+            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components; edges {bad:?})",
+            q.boundary_edges, q.non_manifold_edges, q.non_manifold_vertices, q.components
+        )));
+    }
+    if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
+        warnings.push(format!("{n} intersecting face pairs"));
+    }
+    let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3;
+    Ok(FusedTooth {
+        fdi: ct.fdi,
+        mesh,
+        source,
+        ios_vertex,
+        band_faces: band_start..band_end,
+        quality: q,
+        warnings,
+        cut_ms: ct.cut_ms,
+        stitch_ms,
+    })
+}
+
+fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
+    margin.iter().map(|&v| mesh.positions[v as usize]).collect()
+}
+
+/// Mesh edges joining two non-consecutive vertices of loop `lp`, as loop positions.
+fn loop_chords(
+    mesh: &TriMesh,
+    lp: &[u32],
+    wrap: fn(u32) -> BandVertex,
+) -> Vec<(BandVertex, BandVertex)> {
+    let mut pos = vec![u32::MAX; mesh.positions.len()];
+    for (k, &v) in lp.iter().enumerate() {
+        pos[v as usize] = k as u32;
+    }
+    let n = lp.len() as u32;
+    let mut out = Vec::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (pos[t[k] as usize], pos[t[(k + 1) % 3] as usize]);
+            if a == u32::MAX || b == u32::MAX || a > b {
+                continue;
+            }
+            if b - a != 1 && !(a == 0 && b == n - 1) {
+                out.push((wrap(a), wrap(b)));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Builds the band between `side`'s margin and the root's cut loop, assembles crown + band +
+/// root, and optimises and untangles the band (as `opts.stitch` says).
+fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
+    let (margin, frame, rc) = (&side.margin, &ct.frame, &ct.root);
+    let mut mesh = side.crown.clone();
+    let mut ios_vertex = side.ios_vertex.clone();
     let mut source: Vec<u8> = ios_vertex
         .iter()
         .map(|&s| {
@@ -263,13 +479,24 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         .collect();
     let lower_pts = margin_pts_of(&rc.root, &rc.cut_loop);
     let upper_pts = margin_pts_of(&mesh, margin);
+    let chords: Vec<(BandVertex, BandVertex)> = side
+        .chords
+        .iter()
+        .copied()
+        .chain(
+            ct.chords
+                .iter()
+                .copied()
+                .filter(|c| matches!(c.0, BandVertex::Lower(_))),
+        )
+        .collect();
     let band = stitch::build_band(
         &BandLoops {
             upper: &upper_pts,
-            upper_dir: &ct.crown_dirs,
+            upper_dir: &side.dirs,
             lower: &lower_pts,
             lower_dir: &ct.root_dirs,
-            chords: &ct.chords,
+            chords: &chords,
         },
         frame,
         &opts.stitch,
@@ -329,87 +556,14 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     } else {
         super::band_opt::fix_degenerate_band(&mut mesh, band_start..band_end);
     }
-    if opts.stitch.untangle {
-        let u = super::untangle::untangle_band(
-            &mut mesh,
-            band_start..band_end,
-            band_off..root_off,
-            5.0,
-        );
-        if u.crossings_after > 0 {
-            warnings.push(format!(
-                "{} intersecting face pairs with a band face left after untangling ({} before)",
-                u.crossings_after, u.crossings_before
-            ));
-        }
-    }
-    let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
-    q.crown_vertices = ct.kept_ios;
-    q.holes_filled = ct.holes_filled;
-    q.cbct_faces_removed = rc.removed_faces;
-    if !(q.closed && q.manifold && q.components == 1) {
-        let topo = EdgeTopology::new(&mesh);
-        let bad: Vec<String> = topo
-            .undirected_edges()
-            .into_iter()
-            .filter(|&(a, b, c)| c != 2 || topo.faces_of_directed(a, b).count() != 1)
-            .take(4)
-            .map(|(a, b, c)| {
-                format!(
-                    "({a}:{}, {b}:{}) x{c}",
-                    source[a as usize], source[b as usize]
-                )
-            })
-            .collect();
-        return Err(Error::InvalidArgument(format!(
-            "fused mesh is not a closed 2-manifold ({} boundary edges, {} non-manifold edges, {} non-manifold vertices, {} components; edges {bad:?})",
-            q.boundary_edges, q.non_manifold_edges, q.non_manifold_vertices, q.components
-        )));
-    }
-    if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
-        warnings.push(format!("{n} intersecting face pairs"));
-    }
-    let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3;
-    Ok(FusedTooth {
-        fdi: ct.fdi,
+    let untangle = opts.stitch.untangle.then(|| {
+        super::untangle::untangle_band(&mut mesh, band_start..band_end, band_off..root_off, 5.0)
+    });
+    Ok(Assembled {
         mesh,
         source,
         ios_vertex,
-        quality: q,
-        warnings,
-        cut_ms: ct.cut_ms,
-        stitch_ms,
+        band: band_start..band_end,
+        untangle,
     })
-}
-
-fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
-    margin.iter().map(|&v| mesh.positions[v as usize]).collect()
-}
-
-/// Mesh edges joining two non-consecutive vertices of loop `lp`, as loop positions.
-fn loop_chords(
-    mesh: &TriMesh,
-    lp: &[u32],
-    wrap: fn(u32) -> BandVertex,
-) -> Vec<(BandVertex, BandVertex)> {
-    let mut pos = vec![u32::MAX; mesh.positions.len()];
-    for (k, &v) in lp.iter().enumerate() {
-        pos[v as usize] = k as u32;
-    }
-    let n = lp.len() as u32;
-    let mut out = Vec::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (pos[t[k] as usize], pos[t[(k + 1) % 3] as usize]);
-            if a == u32::MAX || b == u32::MAX || a > b {
-                continue;
-            }
-            if b - a != 1 && !(a == 0 && b == n - 1) {
-                out.push((wrap(a), wrap(b)));
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
 }

@@ -14,7 +14,7 @@ use glam::DVec3;
 use std::ops::Range;
 
 /// What [`untangle_band`] did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct UntangleReport {
     /// Intersecting face pairs with a band face, before.
     pub crossings_before: usize,
@@ -22,6 +22,8 @@ pub struct UntangleReport {
     pub crossings_after: usize,
     /// Vertex moves kept.
     pub moves: usize,
+    /// The intersecting pairs left (face indices, band face or not), sorted.
+    pub crossing_pairs: Vec<(u32, u32)>,
 }
 
 /// Directions (unnormalized): the 6 axes and 8 diagonals of a cube, in (t1, t2, normal).
@@ -87,16 +89,22 @@ pub fn untangle_band(
     }
     let scale = band_edge(mesh, band.clone());
     let saved: Vec<DVec3> = mesh.positions[movable.start as usize..movable.end as usize].to_vec();
+    let mut first_pairs = Vec::new();
+    // A vertex whose every candidate lost is tried again only after a neighbour has moved: the
+    // work per band face is bounded whatever the input.
+    let mut stuck = vec![false; nm];
     for round in 0..4 {
-        let (crossing, bad) = find_bad(mesh, band.clone(), scale, min_angle_deg);
+        let (pairs, bad) = find_bad(mesh, band.clone(), scale, min_angle_deg);
         if round == 0 {
-            report.crossings_before = crossing;
+            report.crossings_before = pairs.len();
+            first_pairs = pairs.clone();
         }
-        report.crossings_after = crossing;
+        report.crossings_after = pairs.len();
+        report.crossing_pairs = pairs;
         let mut verts: Vec<u32> = bad
             .iter()
             .flat_map(|&f| mesh.triangles[f as usize])
-            .filter(|v| movable.contains(v))
+            .filter(|v| movable.contains(v) && !stuck[(v - movable.start) as usize])
             .collect();
         verts.sort_unstable();
         verts.dedup();
@@ -106,9 +114,19 @@ pub fn untangle_band(
         let grid = near_grid(mesh, band.clone(), scale);
         let mut moved = 0;
         for v in verts {
-            let s = &star[(v - movable.start) as usize];
-            if improve_vertex(mesh, v, s, &grid, scale) {
+            let k = (v - movable.start) as usize;
+            if improve_vertex(mesh, v, &star[k], &grid, scale) {
                 moved += 1;
+                // Its neighbours may do better now.
+                for &f in &star[k] {
+                    for w in mesh.triangles[f as usize] {
+                        if movable.contains(&w) {
+                            stuck[(w - movable.start) as usize] = false;
+                        }
+                    }
+                }
+            } else {
+                stuck[k] = true;
             }
         }
         report.moves += moved;
@@ -118,12 +136,15 @@ pub fn untangle_band(
     }
     if report.moves > 0 {
         // Recount after the last round's moves.
-        report.crossings_after = find_bad(mesh, band, scale, min_angle_deg).0;
+        let pairs = find_bad(mesh, band, scale, min_angle_deg).0;
+        report.crossings_after = pairs.len();
+        report.crossing_pairs = pairs;
         // Within a round the grid does not follow the moves; should a late move have crossed
         // an earlier one, nothing is kept.
         if report.crossings_after > report.crossings_before {
             mesh.positions[movable.start as usize..movable.end as usize].copy_from_slice(&saved);
             report.crossings_after = report.crossings_before;
+            report.crossing_pairs = first_pairs;
             report.moves = 0;
         }
     }
@@ -162,14 +183,14 @@ fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
     if n == 0 { 0.1 } else { sum / n as f64 }
 }
 
-/// Intersecting pairs with a band face (counted once) and the band faces to fix: in such a
+/// Intersecting pairs with a band face (each once, `(smaller, larger)` face index, sorted) and the band faces to fix: in such a
 /// pair, or with an angle under `min_angle_deg`.
 fn find_bad(
     mesh: &TriMesh,
     band: Range<usize>,
     scale: f64,
     min_angle_deg: f64,
-) -> (usize, Vec<u32>) {
+) -> (Vec<(u32, u32)>, Vec<u32>) {
     let region = band_region(mesh, band.clone(), scale);
     let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
     let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
@@ -190,14 +211,13 @@ fn find_bad(
     pairs.dedup();
     let cos_limit = min_angle_deg.to_radians().cos();
     let mut hit = vec![false; band.len()];
-    let mut crossings = 0;
+    let mut crossings = Vec::new();
     for (f, g) in pairs {
-        let (f, g) = (f as usize, g as usize);
-        if !triangles_intersect(mesh, f, g) {
+        if !triangles_intersect(mesh, f as usize, g as usize) {
             continue;
         }
-        crossings += 1;
-        for x in [f, g] {
+        crossings.push((f.min(g), f.max(g)));
+        for x in [f as usize, g as usize] {
             if band.contains(&x) {
                 hit[x - band.start] = true;
             }
@@ -211,12 +231,22 @@ fn find_bad(
         })
         .map(|f| f as u32)
         .collect();
+    crossings.sort_unstable();
+    crossings.dedup();
     (crossings, bad)
 }
 
 /// `(crossings of the star with its surroundings, star faces turned over against `normals`,
-/// smallest star angle)` with `v` where it is.
-fn score(mesh: &TriMesh, star: &[u32], normals: &[DVec3], around: &[u32]) -> (usize, usize, f64) {
+/// smallest star angle)` with `v` where it is. Counting stops past `max_folded` turned-over
+/// faces or `max_crossings` crossings (the candidate has lost by then): `None`.
+fn score(
+    mesh: &TriMesh,
+    star: &[u32],
+    normals: &[DVec3],
+    around: &[u32],
+    max_folded: usize,
+    max_crossings: usize,
+) -> Option<(usize, usize, f64)> {
     let mut ang = 180.0f64;
     let mut folded = 0;
     for (k, &f) in star.iter().enumerate() {
@@ -226,6 +256,9 @@ fn score(mesh: &TriMesh, star: &[u32], normals: &[DVec3], around: &[u32]) -> (us
             folded += 1;
         }
         ang = ang.min(min_angle(a, b, c));
+    }
+    if folded > max_folded {
+        return None;
     }
     let mut crossings = 0;
     for (k, &f) in star.iter().enumerate() {
@@ -239,10 +272,13 @@ fn score(mesh: &TriMesh, star: &[u32], normals: &[DVec3], around: &[u32]) -> (us
                 && triangles_intersect(mesh, f as usize, g as usize)
             {
                 crossings += 1;
+                if crossings > max_crossings {
+                    return None;
+                }
             }
         }
     }
-    (crossings, folded, ang)
+    Some((crossings, folded, ang))
 }
 
 /// Tries candidate positions for `v`; keeps the best if it beats the current one.
@@ -284,7 +320,9 @@ fn improve_vertex(
     }
     let grow = DVec3::splat(0.5 * scale);
     let around = grid.faces_in_box(lo - grow, hi + grow);
-    let current = score(mesh, star, &normals, &around);
+    let Some(current) = score(mesh, star, &normals, &around, usize::MAX, usize::MAX) else {
+        return false;
+    };
     let centroid = ring
         .iter()
         .map(|&w| mesh.positions[w as usize])
@@ -349,8 +387,10 @@ fn improve_vertex(
             continue;
         }
         mesh.positions[vi] = c;
-        let s = score(mesh, star, &normals, &around);
-        if s.1 <= current.1 && better(key(s), best.0) {
+        let Some(s) = score(mesh, star, &normals, &around, current.1, best.0.0) else {
+            continue;
+        };
+        if better(key(s), best.0) {
             best = (key(s), c);
         }
     }

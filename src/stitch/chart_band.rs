@@ -87,7 +87,8 @@ pub(super) fn chart_band(
         clearance: 0.5,
     };
     // First the loops as they chart; if a loop folds back over itself there, again with its
-    // chart positions made monotone along the loop (least-squares, pool adjacent violators).
+    // chart positions made monotone along the loop (least-squares, pool adjacent violators) and
+    // the margin kept above the cut (a clipped, jagged margin or a deep notch can do both).
     let mut attempt = 0;
     let (mut up_c, mut lo_c) = (up_c, lo_c);
     let (inner, y0, (mut band, origin)) = loop {
@@ -111,6 +112,7 @@ pub(super) fn chart_band(
                 attempt += 1;
                 monotone_x(&mut up_c, period);
                 monotone_x(&mut lo_c, period);
+                separate_loops(&mut up_c, &lo_c, period, 0.5 * so.e_upper.min(so.e_lower));
             }
         }
     };
@@ -231,18 +233,52 @@ fn monotone_x(c: &mut [[f64; 2]], period: f64) {
             }
         }
     }
-    let start = c[0][0];
     let mut k = 0;
-    for (b, &(s, m)) in blocks.iter().enumerate() {
-        let mean = s / m as f64;
-        let next = blocks
-            .get(b + 1)
-            .map(|&(s2, m2)| s2 / m2 as f64)
-            .unwrap_or(start + period);
-        let step = ((next - mean) / (m + 1) as f64).min(1e-4);
-        for j in 0..m {
-            c[k][0] = mean + step * j as f64;
+    for &(s, m) in &blocks {
+        for _ in 0..m {
+            c[k][0] = s / m as f64;
             k += 1;
         }
+    }
+    // Strictly increasing, by a step far above rounding and far below any edge, and closing
+    // within one period.
+    let eps = 1e-7 * period;
+    for k in 1..n {
+        c[k][0] = c[k][0].max(c[k - 1][0] + eps);
+    }
+    let span = c[n - 1][0] - c[0][0];
+    let room = period - eps;
+    if span > room {
+        let x0 = c[0][0];
+        for p in c.iter_mut() {
+            p[0] = x0 + (p[0] - x0) * room / span;
+        }
+    }
+}
+
+/// Raises margin chart points that lie below the cut loop (a notch reaching lower than the
+/// cut) to just above it, so the two loops bound an annulus; the lift still meets the real
+/// loop vertices.
+fn separate_loops(up: &mut [[f64; 2]], lo: &[[f64; 2]], period: f64, gap: f64) {
+    // The cut loop's height as a function of x (its x is increasing after `monotone_x`).
+    let x0 = lo[0][0];
+    let mut pts: Vec<(f64, f64)> = lo
+        .iter()
+        .map(|c| ((c[0] - x0).rem_euclid(period), c[1]))
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // The higher of the two cut points around x (conservative between them).
+    let height = |x: f64| {
+        let x = (x - x0).rem_euclid(period);
+        let k = pts.partition_point(|p| p.0 <= x);
+        let (a, b) = if k == 0 || k == pts.len() {
+            (pts[pts.len() - 1], pts[0])
+        } else {
+            (pts[k - 1], pts[k])
+        };
+        a.1.max(b.1)
+    };
+    for p in up.iter_mut() {
+        p[1] = p[1].max(height(p[0]) + gap);
     }
 }
