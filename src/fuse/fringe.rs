@@ -81,12 +81,12 @@ fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
     (a.min(b).min(c), a.max(b).max(c))
 }
 
-/// Faces of `mesh` among `candidates` that cross (or touch improperly) any other face of
-/// `mesh`, exact test; flags indexed by face.
-pub fn crossing_faces(mesh: &TriMesh, candidates: &[u32]) -> Vec<bool> {
-    let mut bad = vec![false; mesh.triangles.len()];
+/// Pairs `(f, g)` of faces of `mesh`, `f` among `candidates`, that cross (or touch improperly),
+/// exact test; each pair once, sorted.
+pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
     if candidates.is_empty() {
-        return bad;
+        return out;
     }
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for &f in candidates {
@@ -112,12 +112,13 @@ pub fn crossing_faces(mesh: &TriMesh, candidates: &[u32]) -> Vec<bool> {
                 && l.cmple(gh).all()
                 && triangles_intersect(mesh, f as usize, g as usize)
             {
-                bad[f as usize] = true;
-                bad[g as usize] = true;
+                out.push((f.min(g), f.max(g)));
             }
         }
     }
-    bad
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// Removes from the crown (an open disk with one boundary loop; `src[v]` the input vertex each
@@ -149,13 +150,6 @@ pub fn trim_fringe(
                     .all(|&v| in_reach(&map, v))
             })
             .collect();
-        let mut bad = crossing_faces(&mesh, &fringe);
-        for &f in &extra_faces {
-            if (f as usize) < bad.len() {
-                bad[f as usize] = true;
-            }
-        }
-        extra_faces.clear();
         let is_fringe = {
             let mut v = vec![false; mesh.triangles.len()];
             for &f in &fringe {
@@ -163,6 +157,29 @@ pub fn trim_fringe(
             }
             v
         };
+        // Of a crossing pair one face has to go: the one nearer the margin (so the least of the
+        // crown goes), or the only one in the fringe.
+        let depth = |f: u32| {
+            mesh.triangles[f as usize]
+                .iter()
+                .map(|&v| dist_in[map[v as usize] as usize])
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut bad = vec![false; mesh.triangles.len()];
+        for (f, g) in crossing_pairs(&mesh, &fringe) {
+            let pick = match (is_fringe[f as usize], is_fringe[g as usize]) {
+                (true, true) if depth(g) < depth(f) => g,
+                (true, _) => f,
+                _ => g,
+            };
+            bad[pick as usize] = true;
+        }
+        for &f in &extra_faces {
+            if (f as usize) < bad.len() {
+                bad[f as usize] = true;
+            }
+        }
+        extra_faces.clear();
         // Only faces with an edge on the margin go in one round (peeling): removing a face
         // deeper in would cut a slot into the crown, and a margin that doubles back on itself
         // no longer charts around the tooth. What lies under a removed face is looked at again
