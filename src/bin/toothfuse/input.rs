@@ -65,13 +65,15 @@ impl InputArgs {
         let (Some(ios), Some(cbct)) = (&self.ios, &self.cbct) else {
             return Ok(None);
         };
-        let ios = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
+        let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
         let opts = TeethOptions {
             scheme: self.scheme(),
             label_array: self.cbct_label_array.clone(),
         };
         let t = toothfuse::io::read_teeth_opts(cbct, &opts)
             .with_context(|| format!("reading CBCT {}", cbct.display()))?;
+        // How the labels were read, said once both inputs are read (errors stay one line).
+        eprintln!("{ios_note}");
         eprintln!(
             "CBCT {}: {}numbering {} ({})",
             cbct.display(),
@@ -85,7 +87,12 @@ impl InputArgs {
     }
 }
 
-fn read_ios(path: &Path, scheme: Option<LabelScheme>, array: Option<&str>) -> Result<Ios> {
+/// The IOS input and a line saying which labels and numbering were used.
+fn read_ios(
+    path: &Path,
+    scheme: Option<LabelScheme>,
+    array: Option<&str>,
+) -> Result<(Ios, String)> {
     let what = format!("IOS {}", path.display());
     if path.is_dir() {
         let opts = TeethOptions {
@@ -94,12 +101,12 @@ fn read_ios(path: &Path, scheme: Option<LabelScheme>, array: Option<&str>) -> Re
         };
         let t = toothfuse::io::read_teeth_opts(path, &opts)
             .with_context(|| format!("reading {what}"))?;
-        eprintln!(
+        let note = format!(
             "{what}: numbering {} ({})",
             t.scheme.scheme.name(),
             t.scheme.reason
         );
-        return Ok(Ios::Crowns(t.teeth));
+        return Ok((Ios::Crowns(t.teeth), note));
     }
     let f =
         toothfuse::io::read_mesh_with(path, array).with_context(|| format!("reading {what}"))?;
@@ -126,7 +133,7 @@ fn read_ios(path: &Path, scheme: Option<LabelScheme>, array: Option<&str>) -> Re
             labels,
         )?,
     };
-    eprintln!(
+    let note = format!(
         "{what}: labels {:?}, numbering {} ({})",
         f.label_array.as_deref().unwrap_or(""),
         detected.scheme.name(),
@@ -139,7 +146,7 @@ fn read_ios(path: &Path, scheme: Option<LabelScheme>, array: Option<&str>) -> Re
         labels_to_fdi(detected.scheme, labels)
             .with_context(|| format!("{}: IOS labels", path.display()))?;
     }
-    Ok(Ios::Jaw(lm))
+    Ok((Ios::Jaw(lm), note))
 }
 
 /// Creates the parent folder of `path`.
