@@ -268,6 +268,48 @@ fn ambiguous_or_missing_labels_are_refused_with_the_way_out() {
     write_teeth_dir(&cbct, &ph.cbct, "ply").unwrap();
     let e = fails(&["register", "--ios", s(&generic), "--cbct", s(&cbct)]);
     assert!(e.contains("ambiguous") && e.contains(s(&generic)), "{e}");
+    // CBCT as one mesh whose label array has a name no tool convention uses: refused with the
+    // list of arrays, read with --cbct-label-array.
+    let cbct_vtp = d.join("cbct.vtp");
+    let (cm, cl) = teeth_only(&ph.cbct, i32::from);
+    write_vtp_file(&cbct_vtp, &cm, &[("ToothNumber", &cl)]);
+    let e = fails(&["register", "--ios", s(&named), "--cbct", s(&cbct_vtp)]);
+    assert!(
+        e.contains("\"ToothNumber\"") && e.contains("--cbct-label-array"),
+        "{e}"
+    );
+    let report = d.join("report.json");
+    let log = ok(&[
+        "register",
+        "--ios",
+        s(&named),
+        "--cbct",
+        s(&cbct_vtp),
+        "--cbct-label-array",
+        "ToothNumber",
+        "--out",
+        s(&report),
+    ]);
+    assert!(
+        log.contains("labels \"ToothNumber\", numbering fdi"),
+        "{log}"
+    );
+    assert!(
+        log.contains("labels \"UniversalID\", numbering universal"),
+        "{log}"
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let got: Vec<u64> = r["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["fdi"].as_u64().unwrap())
+        .collect();
+    let want: Vec<u64> = crowns.keys().map(|&f| f as u64).collect();
+    assert_eq!(
+        got, want,
+        "the UniversalID crowns pair with their FDI CBCT teeth"
+    );
     // No label array: the arrays found are listed.
     let bare = d.join("bare.vtp");
     write_vtp_file(&bare, &mesh, &[("RegionId", &labels)]);
