@@ -132,6 +132,13 @@ typedef uint32_t toothfuse_status;
 #endif // __cplusplus
 
 /**
+ * A mesh read from a file: geometry, labels converted to FDI (0 = gingiva), and a JSON
+ * description of how the labels were read. Opaque; free with `toothfuse_mesh_file_free`.
+ * Not thread-safe for concurrent use; may be moved between threads.
+ */
+typedef struct toothfuse_mesh_file toothfuse_mesh_file;
+
+/**
  * A set of tooth meshes per modality, keyed by FDI number. Create with
  * `toothfuse_session_new`, destroy with `toothfuse_session_free`.
  *
@@ -140,6 +147,40 @@ typedef uint32_t toothfuse_status;
  * sessions are independent and may be used from different threads at the same time.
  */
 typedef struct toothfuse_session toothfuse_session;
+
+/**
+ * Tooth numbering of a file's labels: one of the `TOOTHFUSE_NUMBERING_*` values.
+ */
+typedef uint32_t toothfuse_numbering;
+
+/**
+ * A borrowed, read-only view of a held mesh. The pointers point into the session: they stay
+ * valid until the session is changed (any add, replace, remove or clear call) or freed; never
+ * free them.
+ */
+typedef struct toothfuse_mesh_view {
+  /**
+   * `3 * vertex_count` doubles: x, y, z of each vertex, in millimetres.
+   */
+  const double *positions;
+  /**
+   * Number of vertices.
+   */
+  size_t vertex_count;
+  /**
+   * `index_count` vertex indices, 3 per triangle, counter-clockwise seen from outside.
+   */
+  const uint32_t *indices;
+  /**
+   * Number of indices (3 per triangle).
+   */
+  size_t index_count;
+} toothfuse_mesh_view;
+
+/**
+ * Where the labels of a jaw mesh live: one of the `TOOTHFUSE_LABEL_DOMAIN_*` values.
+ */
+typedef uint32_t toothfuse_label_domain;
 
 /**
  * Option preset: one of the `TOOTHFUSE_PRESET_*` values.
@@ -278,30 +319,6 @@ typedef struct toothfuse_fused_quality {
 typedef uint32_t toothfuse_modality;
 
 /**
- * A borrowed, read-only view of a held mesh. The pointers point into the session: they stay
- * valid until the session is changed (any add, replace, remove or clear call) or freed; never
- * free them.
- */
-typedef struct toothfuse_mesh_view {
-  /**
-   * `3 * vertex_count` doubles: x, y, z of each vertex, in millimetres.
-   */
-  const double *positions;
-  /**
-   * Number of vertices.
-   */
-  size_t vertex_count;
-  /**
-   * `index_count` vertex indices, 3 per triangle, counter-clockwise seen from outside.
-   */
-  const uint32_t *indices;
-  /**
-   * Number of indices (3 per triangle).
-   */
-  size_t index_count;
-} toothfuse_mesh_view;
-
-/**
  * What IOS repair changed in one tooth (see `toothfuse_session_set_ios_repair`).
  */
 typedef struct toothfuse_repair_report {
@@ -431,14 +448,29 @@ typedef struct toothfuse_tooth_report {
   bool converged;
 } toothfuse_tooth_report;
 
+
+
+
+
 /**
- * Where the labels of a jaw mesh live: one of the `TOOTHFUSE_LABEL_DOMAIN_*` values.
+ * Detect the numbering from the array name or the values (refused when ambiguous).
  */
-typedef uint32_t toothfuse_label_domain;
+#define TOOTHFUSE_NUMBERING_AUTO 0
 
+/**
+ * FDI two-digit numbers.
+ */
+#define TOOTHFUSE_NUMBERING_FDI 1
 
+/**
+ * Universal 1-32 (33: gingiva, as the DCBIA tools write it).
+ */
+#define TOOTHFUSE_NUMBERING_UNIVERSAL 2
 
-
+/**
+ * Mesh Labeler / MeshSegNet ordinals.
+ */
+#define TOOTHFUSE_NUMBERING_MESHLABELER 3
 
 /**
  * 32-bit IEEE `float`.
@@ -509,6 +541,73 @@ typedef uint32_t toothfuse_label_domain;
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Reads a mesh file (`.ply`, `.stl`, `.obj` with a Teeth3DS `.json` beside it, `.vtp`, `.vtk`;
+ * by extension) into a new handle written to `*file_out` (only on success).
+ *
+ * - `path`: NUL-terminated UTF-8 file path.
+ * - `label_array`: the name of the label array (point or cell data; PLY vertex or face
+ *   property), or NULL to choose by name (`label`, `labels`, `UniversalID`, `PredictedID`,
+ *   `FDI`, ...). A name the file does not hold fails with MISSING_DATA listing its arrays.
+ * - `numbering`: a `TOOTHFUSE_NUMBERING_*` value; AUTO detects it from the array name or the
+ *   values and fails with INVALID_ARGUMENT when they are valid in two numberings.
+ *
+ * The labels come back as FDI numbers (0 = gingiva). Failures (unreadable or malformed file,
+ * named array absent, labels not in the numbering) return the status and leave the message on
+ * `session` (`toothfuse_session_last_error`); the session's teeth are not touched.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `path` (and `label_array` when not NULL) must be
+ * NUL-terminated strings; `file_out` must be NULL or writable.
+ */
+toothfuse_status toothfuse_session_read_file(const struct toothfuse_session *session,
+                                             const char *path,
+                                             const char *label_array,
+                                             toothfuse_numbering numbering,
+                                             struct toothfuse_mesh_file **file_out);
+
+/**
+ * Frees a file handle (a no-op on NULL); views into it become invalid.
+ *
+ * # Safety
+ * `file` must be NULL or a handle from `toothfuse_session_read_file` not yet freed.
+ */
+void toothfuse_mesh_file_free(struct toothfuse_mesh_file *file);
+
+/**
+ * A borrowed view of the file's geometry (double x, y, z per vertex; 3 indices per triangle,
+ * polygons fan-triangulated), valid until the handle is freed.
+ *
+ * # Safety
+ * `file` must be NULL or a live handle; `view_out` NULL or writable.
+ */
+toothfuse_status toothfuse_mesh_file_view(const struct toothfuse_mesh_file *file,
+                                          struct toothfuse_mesh_view *view_out);
+
+/**
+ * The file's labels as FDI numbers (0 = gingiva) in `domain` (TOOTHFUSE_LABEL_DOMAIN_VERTEX:
+ * one per vertex; _FACE: one per triangle), borrowed until the handle is freed. A file without
+ * labels in that domain gives `*labels_out = NULL`, `*count_out = 0` and OK.
+ *
+ * # Safety
+ * `file` must be NULL or a live handle; the out pointers NULL or writable.
+ */
+toothfuse_status toothfuse_mesh_file_labels(const struct toothfuse_mesh_file *file,
+                                            toothfuse_label_domain domain,
+                                            const int32_t **labels_out,
+                                            size_t *count_out);
+
+/**
+ * How the file's labels were read, as a NUL-terminated JSON object:
+ * `{"label_array": name or null, "numbering": "fdi"|"universal"|"meshlabeler" or null,
+ * "numbering_reason": text or null, "arrays": [{"name", "on_points", "type"}, ...]}`.
+ * Borrowed until the handle is freed; NULL for a NULL handle.
+ *
+ * # Safety
+ * `file` must be NULL or a live handle.
+ */
+const char *toothfuse_mesh_file_description(const struct toothfuse_mesh_file *file);
 
 /**
  * Runs the one-call fuse: registers anew with `options` (NULL = defaults; always, so the

@@ -5,7 +5,9 @@
 # libopenmesh-dev, libgtest-dev, and cbindgen 0.29.0 (cargo), plus rustfmt/clippy (rustup).
 # Then: cargo fmt --check, cargo clippy -D warnings, cargo test --release, the header check,
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
-# tests against the installed package), an outside find_package consumer and a pkg-config build.
+# tests against the installed package), an outside find_package consumer, a pkg-config build, and
+# the Python package: pip install ./bindings/python into a fresh venv (numpy and pytest from PyPI;
+# the library is the one cargo already built in target/) and its pytest suite run there.
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -30,6 +32,7 @@ command -v g++ >/dev/null || missing+=(g++)
 [ -e /usr/include/OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh ] || missing+=(libopenmesh-dev)
 [ -e /usr/include/gtest/gtest.h ] || missing+=(libgtest-dev)
 command -v python3 >/dev/null || missing+=(python3)
+python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 if [ ${#missing[@]} -gt 0 ]; then
   echo "installing: ${missing[*]}"
   sudo_if_needed apt-get update
@@ -110,5 +113,19 @@ cc -std=c11 $(pkg-config --cflags toothfuse) cpp_tests/consumer/main.c \
   -o "$BUILD/pkgconfig_consumer_static" "$PREFIX/lib/libtoothfuse.a" \
   $(pkg-config --libs-only-l --static toothfuse | sed 's/-ltoothfuse//')
 "$BUILD/pkgconfig_consumer_static"
+
+# ---------------------------------------------------------------------------------------------
+section "Python package: pip install ./bindings/python into a fresh venv, import, pytest there"
+VENV="$BUILD/pyvenv"
+rm -rf "$VENV"
+python3 -m venv "$VENV"
+# From another directory, so that `import toothfuse` can only find the installed package. The
+# build reuses target/ (CARGO_TARGET_DIR is honoured): cargo only confirms the library is fresh.
+(cd "$BUILD" && "$VENV/bin/pip" install --quiet --disable-pip-version-check \
+  "$ROOT/bindings/python" pytest)
+(cd "$BUILD" && "$VENV/bin/python" -c \
+  'import toothfuse; print("toothfuse", toothfuse.version(), "from", toothfuse.__file__)')
+(cd "$BUILD" && TOOTHFUSE_JAWS_DIR="$BUILD/cpp_tests/jaws" \
+  "$VENV/bin/python" -m pytest -q "$ROOT/bindings/python/tests")
 
 section "all tests passed in $(($(date +%s) - START)) s"

@@ -145,12 +145,17 @@ fn split_labeled_jaw_by_vertex_and_face_labels() {
     assert!(e.contains("label 8 is not an FDI tooth number"), "{e}");
     let teeth = read_teeth_with(&p, LabelScheme::MeshLabeler).unwrap();
     assert_eq!(teeth.keys().copied().collect::<Vec<_>>(), vec![11, 21, 31]);
+    // Universal: 33 is the DCBIA tools' gingiva (dropped), 34 is no tooth.
     let (jaw, vl) = labeled_jaw([0, 8, 9, 33]);
+    write_mesh(&p, &jaw, &[("label", &vl)]).unwrap();
+    let teeth = read_teeth_with(&p, LabelScheme::Universal).unwrap();
+    assert_eq!(teeth.keys().copied().collect::<Vec<_>>(), vec![11, 21]);
+    let (jaw, vl) = labeled_jaw([0, 8, 9, 34]);
     write_mesh(&p, &jaw, &[("label", &vl)]).unwrap();
     let e = read_teeth_with(&p, LabelScheme::Universal)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("label 33 is outside 1-32"), "{e}");
+    assert!(e.contains("label 34 is outside 1-32"), "{e}");
 
     // No labels at all, or only gingiva.
     write_mesh(&p, &jaw, &[]).unwrap();

@@ -17,8 +17,9 @@ explicit labels, a mesh's custom scalar attribute (default "label", per vertex t
 is used, or its quality with attribute="quality".
 
 CBCT teeth may also be separate meshes, one tooth each: pass a dict {fdi: mesh} to
-fuse_meshes, or cbct_ids={fdi: id} to fuse_meshset. Built on the toothfuse Python binding
-(bindings/python/toothfuse.py, ctypes); pymeshlab (and so numpy) is needed only to build the
+fuse_meshes, or cbct_ids={fdi: id} to fuse_meshset. Built on the toothfuse Python package
+(`pip install ./bindings/python` into the Python that runs pymeshlab; it ships the library);
+pymeshlab (and so numpy) is needed only to build the
 output mesh: everything else works on any object with pymeshlab's Mesh accessors.
 """
 
@@ -35,7 +36,7 @@ _QUALITY_GETTERS = [("vertex_scalar_array", False), ("face_scalar_array", True)]
 
 def _ints(values, what):
     out = []
-    for n, v in enumerate(toothfuse._flat(values)):
+    for n, v in enumerate(toothfuse._core._flat(values)):
         iv = int(round(float(v)))
         if iv != v:
             raise ValueError(f"{what}: value {v} at {n} is not an integer tooth label")

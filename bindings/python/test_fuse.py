@@ -170,7 +170,7 @@ class FuseTest(unittest.TestCase):
                 s.transform(11, "ios_to_cbct")
 
     def test_numpy_inputs_and_outputs(self):
-        np = toothfuse._numpy()
+        np = toothfuse._core._numpy()
         if np is None:
             self.skipTest("numpy is not installed (optional)")
         (ixyz, itri, ip), (cxyz, ctri, cp) = self.ios, self.cbct

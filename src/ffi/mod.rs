@@ -10,11 +10,12 @@
 //! a panic boundary; a panic poisons the session.
 //!
 //! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
-//! (reading a tooth back), [`register`] (options, registration and its report), [`fuse`]
+//! (reading a tooth back), [`file`] (reading mesh files), [`register`] (options, registration and its report), [`fuse`]
 //! (one-call fuse, fused meshes and their quality), [`stages`] (cut and stitch as separate
 //! stages, the cut roots), plus [`status`], [`version`] and the [`boundary`] helpers.
 
 pub mod boundary;
+pub mod file;
 pub mod fuse;
 pub mod mesh;
 pub mod register;
@@ -23,6 +24,7 @@ pub mod stages;
 pub mod status;
 pub mod version;
 
+pub use file::*;
 pub use fuse::*;
 pub use mesh::*;
 pub use register::*;

@@ -6,6 +6,8 @@
 //! expected; no input makes a reader panic. Polygons are triangulated by fans `(v0, vi, vi+1)`,
 //! so a face label is repeated on each of its triangles.
 
+mod labels;
+mod numbering;
 mod obj;
 mod ply;
 mod stl;
@@ -15,13 +17,16 @@ mod vtp;
 mod vtp_data;
 mod vtp_write;
 
-pub use ply::{read_ply_bytes, write_ply};
+pub use labels::{ArrayInfo, KNOWN_LABEL_NAMES, MeshFile};
+pub use numbering::{Detected, detect_scheme, labels_to_fdi};
+pub use ply::{read_ply_bytes, read_ply_bytes_with, write_ply};
 pub use stl::{read_stl_bytes, write_stl};
 pub use teeth::{
-    LabelScheme, fdi_to_universal, read_teeth, read_teeth_with, universal_to_fdi, write_teeth_dir,
+    LabelScheme, Teeth, TeethOptions, fdi_to_universal, read_teeth, read_teeth_opts,
+    read_teeth_with, universal_to_fdi, write_teeth_dir,
 };
-pub use vtk_legacy::read_vtk_legacy_bytes;
-pub use vtp::{VtpEncoding, read_vtp_bytes, write_vtp};
+pub use vtk_legacy::{read_vtk_legacy_bytes, read_vtk_legacy_bytes_with};
+pub use vtp::{VtpEncoding, read_vtp_bytes, read_vtp_bytes_with, write_vtp};
 
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
@@ -78,23 +83,39 @@ pub enum PlyEncoding {
 }
 
 /// Reads a mesh file, choosing the format by extension (`.ply`, `.stl`, `.obj`, `.vtp`, `.vtk`,
-/// case-insensitive). Labels found in the file (per-vertex or per-face arrays named like
-/// `label`) come back in the [`LabeledMesh`]. For `.obj`, a Teeth3DS JSON beside the file
-/// (same stem, `.json`) supplies per-vertex labels.
+/// case-insensitive). Labels found in the file (the per-vertex and/or per-face array with the
+/// best-ranked known label name: `label`, `labels`, `UniversalID`, `PredictedID`, `FDI`, …, see
+/// [`KNOWN_LABEL_NAMES`]) come back in the [`LabeledMesh`]. For `.obj`, a Teeth3DS JSON beside
+/// the file (same stem, `.json`) supplies per-vertex labels.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<LabeledMesh> {
+    read_mesh_with(path, None).map(|f| f.mesh)
+}
+
+/// Like [`read_mesh`], with the labels from the point or cell array (PLY: vertex or face
+/// property) named `label_array` when given (an error listing the file's arrays when it has
+/// none of that name), and reporting which array the labels came from and every one-component
+/// array found.
+pub fn read_mesh_with(path: impl AsRef<Path>, label_array: Option<&str>) -> Result<MeshFile> {
     let path = path.as_ref();
     let format = Format::from_path(path)?;
     let bytes = std::fs::read(path).map_err(|e| file_err(path, format!("cannot read: {e}")))?;
     let name = path.display().to_string();
     match format {
-        Format::Ply => read_ply_bytes(&name, &bytes),
-        Format::Stl => read_stl_bytes(&name, &bytes).map(|mesh| LabeledMesh {
-            mesh,
-            ..Default::default()
-        }),
-        Format::Obj => obj::read_obj_with_labels(path, &bytes),
-        Format::Vtp => read_vtp_bytes(&name, &bytes),
-        Format::VtkLegacy => read_vtk_legacy_bytes(&name, &bytes),
+        Format::Ply => read_ply_bytes_with(&name, &bytes, label_array),
+        Format::Stl => {
+            let mesh = read_stl_bytes(&name, &bytes)?;
+            labels::choose(&name, &[], label_array)?;
+            Ok(MeshFile {
+                mesh: LabeledMesh {
+                    mesh,
+                    ..Default::default()
+                },
+                ..Default::default()
+            })
+        }
+        Format::Obj => obj::read_obj_with_labels(path, &bytes, label_array),
+        Format::Vtp => read_vtp_bytes_with(&name, &bytes, label_array),
+        Format::VtkLegacy => read_vtk_legacy_bytes_with(&name, &bytes, label_array),
     }
 }
 
@@ -162,23 +183,6 @@ pub fn real_data_dir() -> Option<PathBuf> {
             PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"))
         });
     dir.is_dir().then_some(dir)
-}
-
-/// True for array or property names that carry tooth labels: `label`, `labels` or any name
-/// containing `label` (case-insensitive).
-pub(crate) fn is_label_name(name: &str) -> bool {
-    name.to_ascii_lowercase().contains("label")
-}
-
-/// Ranks label names: exact `label`/`labels` first, then other names containing `label`.
-pub(crate) fn label_rank(name: &str) -> Option<u8> {
-    let l = name.to_ascii_lowercase();
-    match l.as_str() {
-        "label" => Some(0),
-        "labels" => Some(1),
-        _ if is_label_name(&l) => Some(2),
-        _ => None,
-    }
 }
 
 /// Converts a numeric label value to i32; fails on fractions or out-of-range values.

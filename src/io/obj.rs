@@ -6,6 +6,7 @@
 //! indices; polygons are fan-triangulated; other records (`vt`, `vn`, `g`, `o`, `s`, `usemtl`,
 //! `mtllib`, `l`, comments) are ignored.
 
+use super::labels::{ArrayInfo, MeshFile, choose};
 use super::{FaceBuilder, check_finite, check_vertex_count, file_err, label_from_f64};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
@@ -13,12 +14,23 @@ use glam::DVec3;
 use std::io::Write;
 use std::path::Path;
 
-/// Reads an OBJ, plus per-vertex labels from `<stem>.json` beside it when that file exists.
-pub(super) fn read_obj_with_labels(path: &Path, bytes: &[u8]) -> Result<LabeledMesh> {
+/// Reads an OBJ, plus per-vertex labels from `<stem>.json` beside it when that file exists
+/// (its `labels` array; `label_array`, if given, must name it).
+pub(super) fn read_obj_with_labels(
+    path: &Path,
+    bytes: &[u8],
+    label_array: Option<&str>,
+) -> Result<MeshFile> {
     let name = path.display().to_string();
     let mesh = read_obj_bytes(&name, bytes)?;
     let json = path.with_extension("json");
-    let vertex_labels = if json.is_file() {
+    let arrays = if json.is_file() {
+        vec![ArrayInfo::new("labels", true, "Teeth3DS JSON")]
+    } else {
+        Vec::new()
+    };
+    let chosen = choose(&name, &arrays, label_array)?;
+    let vertex_labels = if chosen.is_some() {
         let text =
             std::fs::read(&json).map_err(|e| file_err(&json, format!("cannot read: {e}")))?;
         Some(parse_teeth3ds_labels(
@@ -29,10 +41,15 @@ pub(super) fn read_obj_with_labels(path: &Path, bytes: &[u8]) -> Result<LabeledM
     } else {
         None
     };
-    Ok(LabeledMesh {
-        mesh,
-        vertex_labels,
-        face_labels: None,
+    Ok(MeshFile {
+        mesh: LabeledMesh {
+            mesh,
+            vertex_labels,
+            face_labels: None,
+        },
+        teeth3ds_json: chosen.is_some(),
+        label_array: chosen,
+        arrays,
     })
 }
 

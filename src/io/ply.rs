@@ -1,14 +1,14 @@
 //! PLY (Stanford polygon format), ASCII and binary, through the `ply-rs-bw` crate.
 //!
 //! Read: `vertex` element with `x, y, z` (any scalar type), optional per-vertex label property
-//! (see [`super::label_rank`]; any numeric type); `face` element with `vertex_indices` or
-//! `vertex_index` (a list of any integer type, fan-triangulated) and an optional face label.
+//! (a given name, or else a known label name: see [`super::labels`]; any numeric type); `face`
+//! element with `vertex_indices` or `vertex_index` (a list of any integer type,
+//! fan-triangulated) and an optional face label of the same name.
 //! Read through `ply-rs-bw` with typed elements (no per-vertex maps). Write: `x, y, z` as
 //! double (lossless) plus `int` vertex properties.
 
-use super::{
-    FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64, label_rank,
-};
+use super::labels::{ArrayInfo, MeshFile, choose};
+use super::{FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
@@ -16,13 +16,41 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
     DefaultElement, ElementDef, Property, PropertyAccess, PropertyAccessResult, PropertyType,
 };
+use std::cell::RefCell;
 use std::io::Write;
 
-/// A `vertex` element as parsed: coordinates and the best-ranked label property.
+thread_local! {
+    /// The label property being read on this thread. `PropertyAccess::new` takes no arguments,
+    /// so the element types look the chosen name up here; set by [`read_ply_bytes_with`] for
+    /// the duration of one parse.
+    static LABEL_KEY: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Sets [`LABEL_KEY`] and clears it again when dropped.
+struct LabelKey;
+
+impl LabelKey {
+    fn set(name: Option<String>) -> LabelKey {
+        LABEL_KEY.with(|k| *k.borrow_mut() = name);
+        LabelKey
+    }
+}
+
+impl Drop for LabelKey {
+    fn drop(&mut self) {
+        LABEL_KEY.with(|k| *k.borrow_mut() = None);
+    }
+}
+
+fn is_label_key(key: &str) -> bool {
+    LABEL_KEY.with(|k| k.borrow().as_deref() == Some(key))
+}
+
+/// A `vertex` element as parsed: coordinates and the label property's value.
 #[derive(Default)]
 struct PlyVertex {
     xyz: [Option<f64>; 3],
-    label: Option<(u8, f64)>,
+    label: Option<f64>,
 }
 
 impl PropertyAccess for PlyVertex {
@@ -38,18 +66,18 @@ impl PropertyAccess for PlyVertex {
         };
         match (slot, scalar_f64(&p)) {
             (Some(k), v) => self.xyz[k] = v,
-            (None, Some(v)) => keep_label(&mut self.label, key, v),
-            (None, None) => {}
+            (None, Some(v)) if is_label_key(key) => self.label = Some(v),
+            (None, _) => {}
         }
         PropertyAccessResult::Set
     }
 }
 
-/// A `face` element as parsed: its index list (as stored) and the best-ranked label.
+/// A `face` element as parsed: its index list (as stored) and the label property's value.
 #[derive(Default)]
 struct PlyFace {
     idx: Option<Property>,
-    label: Option<(u8, f64)>,
+    label: Option<f64>,
 }
 
 impl PropertyAccess for PlyFace {
@@ -59,24 +87,25 @@ impl PropertyAccess for PlyFace {
     fn set_property(&mut self, key: &str, p: Property) -> PropertyAccessResult {
         if key == "vertex_indices" || (key == "vertex_index" && self.idx.is_none()) {
             self.idx = Some(p);
-        } else if let Some(v) = scalar_f64(&p) {
-            keep_label(&mut self.label, key, v);
+        } else if is_label_key(key) {
+            self.label = scalar_f64(&p);
         }
         PropertyAccessResult::Set
     }
 }
 
-/// Keeps the value of the best-ranked label property (first one on ties).
-fn keep_label(slot: &mut Option<(u8, f64)>, key: &str, v: f64) {
-    if let Some(r) = label_rank(key)
-        && slot.is_none_or(|(best, _)| r < best)
-    {
-        *slot = Some((r, v));
-    }
-}
-
 /// Reads a PLY file held in memory; `file` names it in error messages.
 pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
+    read_ply_bytes_with(file, bytes, None).map(|f| f.mesh)
+}
+
+/// Like [`read_ply_bytes`], with the labels from the vertex or face property named
+/// `label_array` instead of the automatic choice, and the scalar properties found.
+pub fn read_ply_bytes_with(
+    file: &str,
+    bytes: &[u8],
+    label_array: Option<&str>,
+) -> Result<MeshFile> {
     let err = |m: String| Error::Io(format!("{file}: {m}"));
     let perr = |e: ply_rs_bw::parser::ParseError| Error::Io(format!("{file}: malformed PLY: {e}"));
     let mut rd = Reader::new(bytes);
@@ -93,7 +122,18 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
             _ => return Err(err(format!("vertex property `{c}` missing or a list"))),
         }
     }
-    let has_vlabel = best_label(vdef).is_some();
+    let mut arrays = scalar_props(vdef, true);
+    if let Some(fdef) = header.elements.get("face") {
+        arrays.extend(scalar_props(fdef, false));
+    }
+    let chosen = choose(file, &arrays, label_array)?;
+    let has_label = |def: &ElementDef| {
+        chosen
+            .as_deref()
+            .is_some_and(|c| arrays.iter().any(|a| a.name == c) && def.properties.contains_key(c))
+    };
+    let has_vlabel = has_label(vdef);
+    let _key = LabelKey::set(chosen.clone());
     let mut verts: Vec<PlyVertex> = Vec::new();
     let mut faces: Vec<PlyFace> = Vec::new();
     let mut face_key = None;
@@ -115,7 +155,7 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         "face element has neither `vertex_indices` nor `vertex_index`".into(),
                     ));
                 }
-                has_flabel = best_label(def).is_some();
+                has_flabel = has_label(def);
                 faces = Parser::<PlyFace>::new()
                     .read_payload_for_element(&mut rd, def, &header)
                     .map_err(perr)?;
@@ -136,7 +176,7 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         };
         positions.push(DVec3::new(x, y, z));
         if let Some(out) = vlabels.as_mut() {
-            let l = v.label.map_or(f64::NAN, |(_, l)| l);
+            let l = v.label.unwrap_or(f64::NAN);
             out.push(label_from_f64(l, file, "vertex", i)?);
         }
     }
@@ -153,7 +193,7 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         }
         fb.polygon(&idx)?;
         if has_flabel {
-            let l = e.label.map_or(f64::NAN, |(_, l)| l);
+            let l = e.label.unwrap_or(f64::NAN);
             plabels.push(label_from_f64(l, file, "face", f)?);
         }
     }
@@ -163,10 +203,16 @@ pub fn read_ply_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
             .map(|&p| plabels[p as usize])
             .collect()
     });
-    Ok(LabeledMesh {
-        mesh: TriMesh::new(positions, fb.triangles),
-        vertex_labels: vlabels,
-        face_labels,
+    let found = vlabels.is_some() || face_labels.is_some();
+    Ok(MeshFile {
+        mesh: LabeledMesh {
+            mesh: TriMesh::new(positions, fb.triangles),
+            vertex_labels: vlabels,
+            face_labels,
+        },
+        label_array: chosen.filter(|_| found),
+        teeth3ds_json: false,
+        arrays,
     })
 }
 
@@ -182,14 +228,20 @@ impl PropertyAccess for Skip {
     }
 }
 
-/// The best label property of an element (scalar only).
-fn best_label(def: &ElementDef) -> Option<String> {
+/// The scalar properties of an element other than `x, y, z` (label candidates).
+fn scalar_props(def: &ElementDef, on_points: bool) -> Vec<ArrayInfo> {
     def.properties
         .values()
-        .filter(|p| matches!(p.data_type, PropertyType::Scalar(_)))
-        .filter_map(|p| label_rank(&p.name).map(|r| (r, p.name.clone())))
-        .min_by_key(|(r, _)| *r)
-        .map(|(_, n)| n)
+        .filter(|p| !(on_points && matches!(p.name.as_str(), "x" | "y" | "z")))
+        .filter_map(|p| match &p.data_type {
+            PropertyType::Scalar(t) => Some(ArrayInfo::new(
+                &p.name,
+                on_points,
+                &format!("{t:?}").to_ascii_lowercase(),
+            )),
+            PropertyType::List(..) => None,
+        })
+        .collect()
 }
 
 fn scalar_f64(p: &Property) -> Option<f64> {

@@ -1,7 +1,8 @@
 //! Per-tooth meshes: a folder of `tooth_<n>.<ext>` files, or one labeled jaw mesh split by its
 //! labels, with the tooth numbers converted to FDI by a [`LabelScheme`].
 
-use super::{Format, read_mesh, write_mesh};
+use super::numbering::{Detected, detect_scheme};
+use super::{Format, read_mesh, read_mesh_with, write_mesh};
 use crate::arch::check_fdi;
 use crate::mesh::{TriMesh, split_by_face_labels, split_by_vertex_labels};
 use crate::{Error, Result};
@@ -25,6 +26,32 @@ pub enum LabelScheme {
 }
 
 impl LabelScheme {
+    /// The CLI name: `fdi`, `universal` or `meshlabeler`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LabelScheme::Fdi => "fdi",
+            LabelScheme::Universal => "universal",
+            LabelScheme::MeshLabeler => "meshlabeler",
+        }
+    }
+
+    /// The scheme of a CLI name ([`LabelScheme::name`]); `None` for other names.
+    pub fn from_name(name: &str) -> Option<LabelScheme> {
+        [
+            LabelScheme::Fdi,
+            LabelScheme::Universal,
+            LabelScheme::MeshLabeler,
+        ]
+        .into_iter()
+        .find(|s| s.name() == name)
+    }
+
+    /// True for the gingiva label: 0 in every scheme, and 33 in Universal numbering (as the
+    /// DCBIA tools write it).
+    pub fn is_gingiva(self, label: i32) -> bool {
+        label == 0 || (self == LabelScheme::Universal && label == 33)
+    }
+
     /// The FDI number of a non-zero label or file number; errors name the label and the
     /// scheme.
     pub fn to_fdi(self, label: i32) -> Result<u8> {
@@ -63,6 +90,73 @@ pub fn fdi_to_universal(fdi: u8) -> Option<i32> {
     (1..=32).find(|&n| universal_to_fdi(n) == Some(fdi))
 }
 
+/// How [`read_teeth_opts`] reads per-tooth meshes.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TeethOptions {
+    /// The numbering of labels and file names; `None` detects it ([`detect_scheme`]).
+    pub scheme: Option<LabelScheme>,
+    /// The label array of a labeled mesh file; `None` chooses by name.
+    pub label_array: Option<String>,
+}
+
+/// Per-tooth meshes as read by [`read_teeth_opts`], with how their numbers were read.
+#[derive(Clone, Debug)]
+pub struct Teeth {
+    /// The teeth by FDI number.
+    pub teeth: BTreeMap<u8, TriMesh>,
+    /// The numbering used (given or detected) and why.
+    pub scheme: Detected,
+    /// The label array of a labeled mesh file (`None` for a folder).
+    pub label_array: Option<String>,
+}
+
+/// Reads per-tooth meshes like [`read_teeth_with`], choosing the label array and detecting the
+/// numbering unless `opts` names them.
+pub fn read_teeth_opts(path: impl AsRef<Path>, opts: &TeethOptions) -> Result<Teeth> {
+    let path = path.as_ref();
+    let what = path.display().to_string();
+    let given = |s: LabelScheme| Detected {
+        scheme: s,
+        reason: "given".into(),
+    };
+    if path.is_dir() {
+        let numbers = folder_files(path)?;
+        let nums: Vec<i32> = numbers.iter().map(|(n, _)| *n).collect();
+        let scheme = match opts.scheme {
+            Some(s) => given(s),
+            None => detect_scheme(&what, Some("tooth_<n> file names"), false, &nums)?,
+        };
+        let teeth = read_folder(path, scheme.scheme)?;
+        return Ok(Teeth {
+            teeth,
+            scheme,
+            label_array: None,
+        });
+    }
+    let f = read_mesh_with(path, opts.label_array.as_deref())?;
+    let labels = f
+        .mesh
+        .face_labels
+        .as_ref()
+        .or(f.mesh.vertex_labels.as_ref());
+    let scheme = match (opts.scheme, labels) {
+        (Some(s), _) => given(s),
+        (None, Some(l)) => detect_scheme(&what, f.label_array.as_deref(), f.teeth3ds_json, l)?,
+        (None, None) => {
+            return Err(Error::Io(format!(
+                "{what}: no tooth label array, so it cannot be split into teeth; one-component                  arrays in the file: {} (name one with --cbct-label-array)",
+                f.arrays_list()
+            )));
+        }
+    };
+    let teeth = split_teeth(path, &f.mesh, scheme.scheme)?;
+    Ok(Teeth {
+        teeth,
+        scheme,
+        label_array: f.label_array,
+    })
+}
+
 /// Reads per-tooth meshes with FDI numbering; see [`read_teeth_with`].
 pub fn read_teeth(path: impl AsRef<Path>) -> Result<BTreeMap<u8, TriMesh>> {
     read_teeth_with(path, LabelScheme::Fdi)
@@ -83,6 +177,15 @@ pub fn read_teeth_with(
         return read_folder(path, scheme);
     }
     let lm = read_mesh(path)?;
+    split_teeth(path, &lm, scheme)
+}
+
+/// Splits a labeled mesh into teeth by its face labels (preferred) or vertex labels.
+fn split_teeth(
+    path: &Path,
+    lm: &crate::mesh::LabeledMesh,
+    scheme: LabelScheme,
+) -> Result<BTreeMap<u8, TriMesh>> {
     let parts = match (&lm.face_labels, &lm.vertex_labels) {
         (Some(fl), _) => split_by_face_labels(&lm.mesh, fl)?,
         (None, Some(vl)) => split_by_vertex_labels(&lm.mesh, vl)?,
@@ -95,7 +198,7 @@ pub fn read_teeth_with(
     };
     let mut out = BTreeMap::new();
     for (label, sub) in parts {
-        if label == 0 {
+        if scheme.is_gingiva(label) {
             continue;
         }
         let fdi = scheme
@@ -112,15 +215,26 @@ pub fn read_teeth_with(
     Ok(out)
 }
 
-fn read_folder(dir: &Path, scheme: LabelScheme) -> Result<BTreeMap<u8, TriMesh>> {
+/// The `tooth_<n>` files of a folder with their numbers, sorted by path.
+fn folder_files(dir: &Path) -> Result<Vec<(i32, std::path::PathBuf)>> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| Error::Io(format!("{}: cannot list folder: {e}", dir.display())))?;
-    let mut files: BTreeMap<u8, std::path::PathBuf> = BTreeMap::new();
+    let mut out = Vec::new();
     for e in entries {
         let p = e
             .map_err(|e| Error::Io(format!("{}: cannot list folder: {e}", dir.display())))?
             .path();
-        let Some(n) = tooth_number(&p) else { continue };
+        if let Some(n) = tooth_number(&p) {
+            out.push((n, p));
+        }
+    }
+    out.sort_by(|a, b| a.1.cmp(&b.1));
+    Ok(out)
+}
+
+fn read_folder(dir: &Path, scheme: LabelScheme) -> Result<BTreeMap<u8, TriMesh>> {
+    let mut files: BTreeMap<u8, std::path::PathBuf> = BTreeMap::new();
+    for (n, p) in folder_files(dir)? {
         let fdi = scheme
             .to_fdi(n)
             .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;

@@ -1,11 +1,13 @@
 //! Legacy VTK (`.vtk`) POLYDATA reader, ASCII and BINARY (big-endian): `POINTS` (any numeric
 //! type), `POLYGONS` and `TRIANGLE_STRIPS` in the classic `n i j k …` layout or the VTK 5.1+
 //! `OFFSETS`/`CONNECTIVITY` layout, `VERTICES`/`LINES` (counted for cell numbering only), and
-//! `POINT_DATA`/`CELL_DATA` with `SCALARS` (+ `LOOKUP_TABLE`) or `FIELD` arrays; the array
-//! named like `label` becomes the labels. Other attributes (vectors, normals, texture
+//! `POINT_DATA`/`CELL_DATA` with `SCALARS` (+ `LOOKUP_TABLE`) or `FIELD` arrays; the
+//! one-component array of a given name, or else of a known label name (see
+//! [`super::labels`]), becomes the labels. Other attributes (vectors, normals, texture
 //! coordinates, colours, tensors, ids, lookup tables, metadata) are skipped.
 
-use super::{FaceBuilder, check_finite, check_vertex_count, label_from_f64, label_rank};
+use super::labels::{ArrayInfo, MeshFile, choose};
+use super::{FaceBuilder, check_finite, check_vertex_count, label_from_f64};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
@@ -131,6 +133,16 @@ struct CellBlock {
 
 /// Reads a legacy VTK POLYDATA file held in memory; `file` names it in error messages.
 pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
+    read_vtk_legacy_bytes_with(file, bytes, None).map(|f| f.mesh)
+}
+
+/// Like [`read_vtk_legacy_bytes`], with the labels from the array named `label_array` (point
+/// or cell data) instead of the automatic choice, and the arrays found.
+pub fn read_vtk_legacy_bytes_with(
+    file: &str,
+    bytes: &[u8],
+    label_array: Option<&str>,
+) -> Result<MeshFile> {
     let mut lx = Lex {
         b: bytes,
         pos: 0,
@@ -163,9 +175,8 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
     let mut points: Vec<DVec3> = Vec::new();
     let mut blocks: [Option<CellBlock>; 4] = [None, None, None, None]; // verts, lines, polys, strips
     let mut domain: Option<(bool, usize)> = None; // (is_point_data, count)
-    // Best label array per domain: (rank, values).
-    let mut plab: Option<(u8, Vec<f64>)> = None;
-    let mut clab: Option<(u8, Vec<f64>)> = None;
+    // Every one-component array with its values, in file order.
+    let mut scalars: Vec<(ArrayInfo, Vec<f64>)> = Vec::new();
     let num = |lx: &Lex, t: &[String], i: usize, what: &str| -> Result<usize> {
         t.get(i)
             .and_then(|s| s.parse().ok())
@@ -231,7 +242,7 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                 let Some((is_point, n)) = domain else {
                     return Err(lx.err(format!("{kw} before POINT_DATA or CELL_DATA")));
                 };
-                let mut found: Vec<(String, usize, Vec<f64>)> = Vec::new();
+                let mut found: Vec<(String, String, usize, Vec<f64>)> = Vec::new();
                 match kw.as_str() {
                     "SCALARS" => {
                         let name = t.get(1).cloned().unwrap_or_default();
@@ -247,7 +258,7 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         }
                         let v =
                             lx.values(n.saturating_mul(comps), &ty, &format!("SCALARS {name}"))?;
-                        found.push((name, comps, v));
+                        found.push((name, ty, comps, v));
                     }
                     "FIELD" => {
                         let k = num(&lx, &t, 2, "FIELD")?;
@@ -264,7 +275,7 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                             let name = a[0].clone();
                             let v = lx.values(comps.saturating_mul(tuples), &ty, &name)?;
                             if tuples == n {
-                                found.push((name, comps, v));
+                                found.push((name, ty, comps, v));
                             }
                         }
                     }
@@ -293,16 +304,9 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
                         lx.values(size.saturating_mul(4), ty, &kw)?;
                     }
                 }
-                for (name, comps, v) in found {
-                    let Some(rank) = label_rank(&name) else {
-                        continue;
-                    };
-                    if comps != 1 {
-                        continue;
-                    }
-                    let slot = if is_point { &mut plab } else { &mut clab };
-                    if slot.as_ref().is_none_or(|(r, _)| rank < *r) {
-                        *slot = Some((rank, v));
+                for (name, ty, comps, v) in found {
+                    if comps == 1 {
+                        scalars.push((ArrayInfo::new(&name, is_point, &ty), v));
                     }
                 }
             }
@@ -328,8 +332,18 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         }
     }
     let n_cells = first_poly_cell + count(2) + count(3);
+    let arrays: Vec<ArrayInfo> = scalars.iter().map(|(a, _)| a.clone()).collect();
+    let chosen = choose(file, &arrays, label_array)?;
+    let mut take = |on_points: bool| {
+        let name = chosen.as_deref()?;
+        let i = scalars
+            .iter()
+            .position(|(a, _)| a.on_points == on_points && a.name == name)?;
+        Some(std::mem::take(&mut scalars[i].1))
+    };
+    let (plab, clab) = (take(true), take(false));
     let vertex_labels = match plab {
-        Some((_, v)) => {
+        Some(v) => {
             if v.len() != points.len() {
                 return Err(Error::Io(format!(
                     "{file}: POINT_DATA has {} values for {} points",
@@ -342,7 +356,7 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         None => None,
     };
     let face_labels = match clab {
-        Some((_, v)) => {
+        Some(v) => {
             if v.len() != n_cells {
                 return Err(Error::Io(format!(
                     "{file}: CELL_DATA has {} values for {n_cells} cells",
@@ -359,10 +373,16 @@ pub fn read_vtk_legacy_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         }
         None => None,
     };
-    Ok(LabeledMesh {
-        mesh: TriMesh::new(points, fb.triangles),
-        vertex_labels,
-        face_labels,
+    let found = vertex_labels.is_some() || face_labels.is_some();
+    Ok(MeshFile {
+        mesh: LabeledMesh {
+            mesh: TriMesh::new(points, fb.triangles),
+            vertex_labels,
+            face_labels,
+        },
+        label_array: chosen.filter(|_| found),
+        teeth3ds_json: false,
+        arrays,
     })
 }
 

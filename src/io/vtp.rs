@@ -3,13 +3,15 @@
 //! and with or without `vtkZLibDataCompressor` block compression; any byte order; several
 //! pieces (merged). Geometry: `Points` (Float32/Float64), `Polys` (fan-triangulated) and
 //! `Strips` (split into triangles); `Verts`/`Lines` only count towards cell numbering.
-//! Labels: `PointData`/`CellData` arrays named like `label` (any numeric type).
+//! Labels: the `PointData`/`CellData` array of a given name, or else of a known label name
+//! (see [`super::labels`]; any numeric type).
 //!
 //! The XML part is parsed by `quick-xml`; the appended block (raw bytes are not XML) is cut
 //! off first and addressed by the arrays' `offset` attributes.
 
+use super::labels::{ArrayInfo, MeshFile, choose};
 use super::vtp_data::{BlockFormat, b64, block, to_f64, type_size};
-use super::{FaceBuilder, check_finite, check_vertex_count, label_from_f64, label_rank};
+use super::{FaceBuilder, check_finite, check_vertex_count, label_from_f64};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
@@ -72,6 +74,16 @@ struct Ctx<'a> {
 
 /// Reads a VTK XML PolyData file held in memory; `file` names it in error messages.
 pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
+    read_vtp_bytes_with(file, bytes, None).map(|f| f.mesh)
+}
+
+/// Like [`read_vtp_bytes`], with the labels from the array named `label_array` (point or cell
+/// data) instead of the automatic choice, and the arrays found.
+pub fn read_vtp_bytes_with(
+    file: &str,
+    bytes: &[u8],
+    label_array: Option<&str>,
+) -> Result<MeshFile> {
     let err = |m: String| Error::Io(format!("{file}: {m}"));
     let app_pos = find(bytes, b"<AppendedData");
     let xml = &bytes[..app_pos.unwrap_or(bytes.len())];
@@ -230,11 +242,25 @@ pub fn read_vtp_bytes(file: &str, bytes: &[u8]) -> Result<LabeledMesh> {
         offs.dedup();
         ctx.offsets = offs;
     }
-    assemble(&ctx, &pieces)
+    assemble(&ctx, &pieces, label_array)
 }
 
-fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
+fn assemble(ctx: &Ctx, pieces: &[Piece], label_array: Option<&str>) -> Result<MeshFile> {
     let file = ctx.file;
+    let mut arrays: Vec<ArrayInfo> = Vec::new();
+    for a in pieces.iter().flat_map(|p| &p.arrays) {
+        let on_points = match a.section {
+            Section::PointData => true,
+            Section::CellData => false,
+            _ => continue,
+        };
+        let info = ArrayInfo::new(&a.name, on_points, &a.ty);
+        if a.components == 1 && !arrays.contains(&info) {
+            arrays.push(info);
+        }
+    }
+    let chosen = choose(file, &arrays, label_array)?;
+    let ch = chosen.as_deref();
     let err = |m: String| Error::Io(format!("{file}: {m}"));
     let mut positions: Vec<DVec3> = Vec::new();
     let mut triangles = Vec::new();
@@ -242,15 +268,15 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
     let all_have = |s: Section| {
         pieces
             .iter()
-            .all(|p| pick_label(p, s).is_some() || count_of(p, s) == 0)
+            .all(|p| pick_label(p, s, ch).is_some() || count_of(p, s) == 0)
     };
     let use_v = pieces
         .iter()
-        .any(|p| pick_label(p, Section::PointData).is_some())
+        .any(|p| pick_label(p, Section::PointData, ch).is_some())
         && all_have(Section::PointData);
     let use_f = pieces
         .iter()
-        .any(|p| pick_label(p, Section::CellData).is_some())
+        .any(|p| pick_label(p, Section::CellData, ch).is_some())
         && all_have(Section::CellData);
     for (pi, p) in pieces.iter().enumerate() {
         let base = positions.len();
@@ -287,7 +313,7 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
         let n_cells = p.verts + p.lines + p.polys + p.strips;
         triangles.extend(fb.triangles.iter().map(|t| t.map(|v| v + base as u32)));
         if use_v {
-            let a = pick_label(p, Section::PointData);
+            let a = pick_label(p, Section::PointData, ch);
             let vals = match a {
                 Some(a) => labels_of(ctx, a, p.points, "vertex")?,
                 None => Vec::new(),
@@ -295,7 +321,7 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
             vlabels.get_or_insert_with(Vec::new).extend(vals);
         }
         if use_f {
-            let vals = match pick_label(p, Section::CellData) {
+            let vals = match pick_label(p, Section::CellData, ch) {
                 Some(a) => labels_of(ctx, a, n_cells, "cell")?,
                 None => Vec::new(),
             };
@@ -310,10 +336,16 @@ fn assemble(ctx: &Ctx, pieces: &[Piece]) -> Result<LabeledMesh> {
         debug_assert_eq!(fb.poly_count(), p.polys + p.strips);
     }
     check_finite(file, &positions)?;
-    Ok(LabeledMesh {
-        mesh: TriMesh::new(positions, triangles),
-        vertex_labels: vlabels,
-        face_labels: flabels,
+    let found = vlabels.is_some() || flabels.is_some();
+    Ok(MeshFile {
+        mesh: LabeledMesh {
+            mesh: TriMesh::new(positions, triangles),
+            vertex_labels: vlabels,
+            face_labels: flabels,
+        },
+        label_array: chosen.filter(|_| found),
+        teeth3ds_json: false,
+        arrays,
     })
 }
 
@@ -389,13 +421,10 @@ fn find_array<'p>(p: &'p Piece, s: Section, name: Option<&str>) -> Option<&'p Ar
         .find(|a| a.section == s && name.is_none_or(|n| a.name == n))
 }
 
-fn pick_label(p: &Piece, s: Section) -> Option<&ArrayDesc> {
-    p.arrays
-        .iter()
-        .filter(|a| a.section == s)
-        .filter_map(|a| label_rank(&a.name).map(|r| (r, a)))
-        .min_by_key(|(r, _)| *r)
-        .map(|(_, a)| a)
+/// The array named `name` in section `s` of a piece.
+fn pick_label<'p>(p: &'p Piece, s: Section, name: Option<&str>) -> Option<&'p ArrayDesc> {
+    let name = name?;
+    p.arrays.iter().find(|a| a.section == s && a.name == name)
 }
 
 fn attr(e: &BytesStart, key: &str) -> Result<Option<String>> {

@@ -6,9 +6,9 @@ CBCT object either has the same attribute or is one tooth named by its "fdi" cus
 its name ("tooth_36"). The result is a new object "toothfuse_fused" (in world space) with
 integer point attributes "label" (FDI) and "source" (0 IOS crown, 1 band, 2 CBCT root).
 
-Install: copy this folder (with bindings/python/toothfuse.py copied into it) into Blender's
-add-ons folder, and make libtoothfuse.so loadable (TOOTHFUSE_LIBRARY=/path/libtoothfuse.so.0 or
-the loader path). All logic lives in convert.py; this file only talks to bpy.
+Install: `<blender>/<version>/python/bin/python3 -m pip install ./bindings/python` (the toothfuse
+package ships libtoothfuse.so), then copy this folder into Blender's add-ons folder. All logic
+lives in convert.py; this file only talks to bpy.
 """
 
 bl_info = {

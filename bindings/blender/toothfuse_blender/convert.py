@@ -6,9 +6,9 @@ fuse through the toothfuse Python binding, and the fused jaw as mesh data for Bl
 import re
 
 try:
-    from . import toothfuse  # a copy of bindings/python/toothfuse.py inside the add-on
+    import toothfuse  # the package, pip-installed into Blender's Python
 except ImportError:
-    import toothfuse  # on PYTHONPATH
+    from . import toothfuse  # or the package folder copied into the add-on
 
 
 class Part:

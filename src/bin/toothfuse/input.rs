@@ -1,11 +1,11 @@
 //! Reading the IOS and CBCT inputs of `register` and `fuse`, and the options they share.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow};
 use clap::Args;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toothfuse::TriMesh;
-use toothfuse::io::LabelScheme;
+use toothfuse::io::{LabelScheme, TeethOptions, detect_scheme, labels_to_fdi};
 use toothfuse::mesh::LabeledMesh;
 use toothfuse::pipeline::PipelineOptions;
 use toothfuse::register::{OutputFrame, Preset};
@@ -20,9 +20,17 @@ pub struct InputArgs {
     /// CBCT teeth: a labeled mesh or a folder of tooth_<n>.stl/.ply/... files.
     #[arg(long, requires = "ios")]
     pub cbct: Option<PathBuf>,
-    /// Tooth numbering of the input labels and file names.
-    #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "meshlabeler"])]
+    /// Tooth numbering of the input labels and file names; auto detects it from the array
+    /// name (UniversalID, PredictedID: universal) or the values where unambiguous.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "fdi", "universal", "meshlabeler"])]
     pub labels: String,
+    /// Name of the IOS label array (point or cell data; PLY vertex or face property). Default:
+    /// the first known name (Label, labels, UniversalID, PredictedID, FDI, ...).
+    #[arg(long, value_name = "NAME")]
+    pub ios_label_array: Option<String>,
+    /// Name of the CBCT label array when --cbct is one labeled mesh.
+    #[arg(long, value_name = "NAME")]
+    pub cbct_label_array: Option<String>,
     /// Output frame: cbct (fused teeth overlay the CBCT volume) or ios.
     #[arg(long, default_value = "cbct", value_parser = ["cbct", "ios"])]
     pub frame: String,
@@ -40,13 +48,9 @@ pub enum Ios {
 }
 
 impl InputArgs {
-    /// The label scheme.
-    pub fn scheme(&self) -> LabelScheme {
-        match self.labels.as_str() {
-            "universal" => LabelScheme::Universal,
-            "meshlabeler" => LabelScheme::MeshLabeler,
-            _ => LabelScheme::Fdi,
-        }
+    /// The label scheme given by --labels (`None`: detect).
+    pub fn scheme(&self) -> Option<LabelScheme> {
+        LabelScheme::from_name(&self.labels)
     }
 
     /// Pipeline options from --preset and --frame.
@@ -61,42 +65,88 @@ impl InputArgs {
         let (Some(ios), Some(cbct)) = (&self.ios, &self.cbct) else {
             return Ok(None);
         };
-        let scheme = self.scheme();
-        let ios = read_ios(ios, scheme)?;
-        let cbct_teeth = toothfuse::io::read_teeth_with(cbct, scheme)
+        let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
+        let opts = TeethOptions {
+            scheme: self.scheme(),
+            label_array: self.cbct_label_array.clone(),
+        };
+        let t = toothfuse::io::read_teeth_opts(cbct, &opts)
             .with_context(|| format!("reading CBCT {}", cbct.display()))?;
-        Ok(Some((ios, cbct_teeth)))
+        // How the labels were read, said once both inputs are read (errors stay one line).
+        eprintln!("{ios_note}");
+        eprintln!(
+            "CBCT {}: {}numbering {} ({})",
+            cbct.display(),
+            t.label_array
+                .as_ref()
+                .map_or(String::new(), |a| format!("labels {a:?}, ")),
+            t.scheme.scheme.name(),
+            t.scheme.reason
+        );
+        Ok(Some((ios, t.teeth)))
     }
 }
 
-fn read_ios(path: &Path, scheme: LabelScheme) -> Result<Ios> {
+/// The IOS input and a line saying which labels and numbering were used.
+fn read_ios(
+    path: &Path,
+    scheme: Option<LabelScheme>,
+    array: Option<&str>,
+) -> Result<(Ios, String)> {
+    let what = format!("IOS {}", path.display());
     if path.is_dir() {
-        let crowns = toothfuse::io::read_teeth_with(path, scheme)
-            .with_context(|| format!("reading IOS {}", path.display()))?;
-        return Ok(Ios::Crowns(crowns));
-    }
-    let mut lm = toothfuse::io::read_mesh(path)
-        .with_context(|| format!("reading IOS {}", path.display()))?;
-    if lm.vertex_labels.is_none() && lm.face_labels.is_none() {
-        bail!(
-            "{}: the IOS mesh has no tooth labels (a per-vertex or per-face `label` property is needed)",
-            path.display()
+        let opts = TeethOptions {
+            scheme,
+            label_array: None,
+        };
+        let t = toothfuse::io::read_teeth_opts(path, &opts)
+            .with_context(|| format!("reading {what}"))?;
+        let note = format!(
+            "{what}: numbering {} ({})",
+            t.scheme.scheme.name(),
+            t.scheme.reason
         );
+        return Ok((Ios::Crowns(t.teeth), note));
     }
+    let f =
+        toothfuse::io::read_mesh_with(path, array).with_context(|| format!("reading {what}"))?;
+    let arrays = f.arrays_list();
+    let mut lm = f.mesh;
+    let labels = lm.face_labels.as_ref().or(lm.vertex_labels.as_ref());
+    let Some(labels) = labels else {
+        return Err(anyhow!(
+            "{}: the IOS mesh has no tooth label array; one-component arrays in the file: {} \
+             (name the label array with --ios-label-array)",
+            path.display(),
+            arrays
+        ));
+    };
+    let detected = match scheme {
+        Some(s) => toothfuse::io::Detected {
+            scheme: s,
+            reason: "given by --labels".into(),
+        },
+        None => detect_scheme(
+            &path.display().to_string(),
+            f.label_array.as_deref(),
+            f.teeth3ds_json,
+            labels,
+        )?,
+    };
+    let note = format!(
+        "{what}: labels {:?}, numbering {} ({})",
+        f.label_array.as_deref().unwrap_or(""),
+        detected.scheme.name(),
+        detected.reason
+    );
     for labels in [&mut lm.vertex_labels, &mut lm.face_labels]
         .into_iter()
         .flatten()
     {
-        for l in labels.iter_mut() {
-            if *l != 0 {
-                *l = scheme
-                    .to_fdi(*l)
-                    .with_context(|| format!("{}: IOS labels", path.display()))?
-                    as i32;
-            }
-        }
+        labels_to_fdi(detected.scheme, labels)
+            .with_context(|| format!("{}: IOS labels", path.display()))?;
     }
-    Ok(Ios::Jaw(lm))
+    Ok((Ios::Jaw(lm), note))
 }
 
 /// Creates the parent folder of `path`.

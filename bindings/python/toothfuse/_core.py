@@ -1,4 +1,4 @@
-"""Python bindings for toothfuse over its C ABI (ctypes; no third-party packages).
+"""The ctypes layer of the toothfuse package over the library's C ABI.
 
     import toothfuse
     with toothfuse.Session() as s:
@@ -16,8 +16,9 @@ sequence of ints, 3 per triangle. array.array('f') input is passed as float32 wi
 through Python floats; everything else as float64. numpy arrays (any shape, e.g. (n, 3)) are
 accepted when numpy is installed: float32/float64 pass without a copy, and `fuse` then returns
 numpy arrays ((n, 3) positions, (m, 3) triangles); otherwise results are array.array values.
-The library is found from the environment variable TOOTHFUSE_LIBRARY, else as
-libtoothfuse.so.<major> / libtoothfuse.so on the loader path. Errors raise ToothfuseError
+The library is found from the environment variable TOOTHFUSE_LIBRARY, else the
+libtoothfuse.so shipped inside the installed package, else as libtoothfuse.so.<major> /
+libtoothfuse.so on the loader path. Errors raise ToothfuseError
 carrying the status and the session's detailed message.
 """
 
@@ -46,8 +47,12 @@ _OK = 0
 ABI_VERSION = 1
 
 
+_BUNDLED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "libtoothfuse.so")
+
+
 def _load():
-    names = [os.environ.get("TOOTHFUSE_LIBRARY"), "libtoothfuse.so.0", "libtoothfuse.so"]
+    bundled = _BUNDLED if os.path.exists(_BUNDLED) else None
+    names = [os.environ.get("TOOTHFUSE_LIBRARY"), bundled, "libtoothfuse.so.0", "libtoothfuse.so"]
     last = None
     for name in names:
         if not name:
@@ -60,6 +65,7 @@ def _load():
 
 
 _lib = _load()
+LIBRARY_PATH = _lib._name
 _size_p = ctypes.POINTER(ctypes.c_size_t)
 _u32_p = ctypes.POINTER(ctypes.c_uint32)
 _i32_p = ctypes.POINTER(ctypes.c_int32)

@@ -1,0 +1,120 @@
+"""pytest suite of the installed toothfuse package (run by scripts/test.sh in a fresh venv):
+the bundled library, read_mesh on label arrays as dental tools write them, numpy in and out,
+errors carrying status and message, and a fuse of a demo jaw read from files."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import toothfuse
+
+# A unit cube split into two open halves: vertices 0-3 bottom, 4-7 top.
+CUBE = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0],
+                 [0, 0, 2], [2, 0, 2], [2, 2, 2], [0, 2, 2]], dtype=np.float64)
+TRIS = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                 [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+
+
+def write_ply(path, name, labels):
+    """ASCII PLY with one int vertex property `name` (as tools such as MeshLab save it)."""
+    lines = ["ply", "format ascii 1.0", f"element vertex {len(CUBE)}", "property double x",
+             "property double y", "property double z", f"property int {name}",
+             f"element face {len(TRIS)}", "property list uchar int vertex_indices", "end_header"]
+    lines += [f"{x} {y} {z} {lab}" for (x, y, z), lab in zip(CUBE, labels)]
+    lines += ["3 " + " ".join(map(str, t)) for t in TRIS]
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def write_vtk(path, name, labels):
+    """Legacy ASCII .vtk with a `RegionId` decoy and the label array `name` as SCALARS."""
+    lines = ["# vtk DataFile Version 4.2", "t", "ASCII", "DATASET POLYDATA",
+             f"POINTS {len(CUBE)} double"]
+    lines += [f"{x} {y} {z}" for x, y, z in CUBE]
+    lines += [f"POLYGONS {len(TRIS)} {4 * len(TRIS)}"]
+    lines += ["3 " + " ".join(map(str, t)) for t in TRIS]
+    lines += [f"POINT_DATA {len(CUBE)}", "FIELD FieldData 1", f"RegionId 1 {len(CUBE)} int"]
+    lines += ["0"] * len(CUBE)
+    lines += [f"SCALARS {name} int 1", "LOOKUP_TABLE default"] + [str(v) for v in labels]
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def test_installed_package_uses_its_own_library():
+    pkg = Path(toothfuse.__file__).resolve().parent
+    assert (pkg / "py.typed").is_file()
+    if "TOOTHFUSE_LIBRARY" not in os.environ:
+        assert Path(toothfuse.LIBRARY_PATH).resolve() == (pkg / "libtoothfuse.so").resolve()
+    assert toothfuse.abi_version() == toothfuse.ABI_VERSION
+    assert toothfuse.version().count(".") == 2
+
+
+@pytest.mark.parametrize("writer,ext", [(write_ply, "ply"), (write_vtk, "vtk")])
+def test_universal_ids_are_detected_and_mapped_to_fdi(tmp_path, writer, ext):
+    # Universal 3 (FDI 16) below, 33 (the DCBIA tools' gingiva) above.
+    path = tmp_path / f"jaw.{ext}"
+    writer(path, "UniversalID", [3] * 4 + [33] * 4)
+    m = toothfuse.read_mesh(path)
+    assert m.label_array == "UniversalID"
+    assert m.numbering == "universal" and "UniversalID" in m.numbering_reason
+    assert m.positions.dtype == np.float64 and m.positions.shape == (8, 3)
+    assert m.triangles.dtype == np.uint32 and m.triangles.shape == (12, 3)
+    np.testing.assert_array_equal(m.positions, CUBE)
+    np.testing.assert_array_equal(m.labels, [16] * 4 + [0] * 4)
+    assert m.face_labels is None
+    assert any(a["name"] == "UniversalID" and a["on_points"] for a in m.arrays)
+    by_name = toothfuse.read_mesh(path, label_array="UniversalID")
+    np.testing.assert_array_equal(by_name.labels, m.labels)
+
+
+def test_numbering_override_and_ambiguity(tmp_path):
+    path = tmp_path / "jaw.ply"
+    write_ply(path, "label", [11] * 4 + [12] * 4)  # valid FDI and Universal, one jaw either way
+    with pytest.raises(toothfuse.ToothfuseError) as e:
+        toothfuse.read_mesh(path)
+    assert e.value.status_name == "invalid argument"
+    assert "ambiguous" in str(e.value) and str(path) in str(e.value)
+    np.testing.assert_array_equal(toothfuse.read_mesh(path, numbering="fdi").labels,
+                                  [11] * 4 + [12] * 4)
+    np.testing.assert_array_equal(toothfuse.read_mesh(path, numbering="universal").labels,
+                                  [23] * 4 + [24] * 4)
+    with pytest.raises(ValueError):
+        toothfuse.read_mesh(path, numbering="palmer")
+
+
+def test_missing_array_and_bad_file_raise_with_status_and_message(tmp_path):
+    path = tmp_path / "jaw.vtk"
+    write_vtk(path, "PredictedID", [0] * 8)
+    with pytest.raises(toothfuse.ToothfuseError) as e:
+        toothfuse.read_mesh(path, label_array="UniversalID")
+    assert e.value.status != 0
+    assert "UniversalID" in str(e.value) and "RegionId" in str(e.value)
+    junk = tmp_path / "junk.ply"
+    junk.write_text("not a mesh\n")
+    with pytest.raises(toothfuse.ToothfuseError) as e:
+        toothfuse.read_mesh(junk)
+    assert str(junk) in str(e.value)
+    with pytest.raises(toothfuse.ToothfuseError):
+        toothfuse.read_mesh(tmp_path / "missing.stl")
+
+
+def jaw_dir(k):
+    root = os.environ.get("TOOTHFUSE_JAWS_DIR")
+    if not root or not Path(root, f"jaw_{k}").is_dir():
+        pytest.skip("TOOTHFUSE_JAWS_DIR is not set (scripts/test.sh points it at ctest's jaws)")
+    return Path(root, f"jaw_{k}")
+
+
+def test_fuse_a_demo_jaw_read_from_files():
+    d = jaw_dir(2)
+    ios = toothfuse.read_mesh(d / "ios.ply")
+    cbct = toothfuse.read_mesh(d / "cbct.ply")
+    assert ios.numbering == "fdi" and cbct.numbering == "fdi"
+    jaw = toothfuse.fuse(ios.positions, ios.triangles, ios.labels,
+                         cbct.positions, cbct.triangles, cbct.labels, frame="ios")
+    assert isinstance(jaw.positions, np.ndarray) and jaw.positions.shape[1] == 3
+    assert jaw.triangles.dtype == np.uint32
+    teeth = sorted(set(np.unique(ios.labels)) - {0})
+    assert jaw.teeth == [t for t in teeth if t in set(np.unique(cbct.labels))]
+    assert sorted(set(jaw.labels.tolist())) == jaw.teeth
+    assert all(q["watertight"] for q in jaw.quality.values()), jaw.quality
