@@ -69,12 +69,14 @@ mod project;
 mod real;
 mod relax;
 pub mod rng;
+mod rough;
 mod shape;
 mod surface_nets;
 
 pub use cbct::CbctRealism;
 pub use grid::Grid;
 pub use ios::IosRealism;
+pub use rough::{IosExport, IosRoughness};
 pub use surface_nets::{extract_closed, largest_component, surface_nets};
 
 use crate::arch::Jaw;
