@@ -15,7 +15,7 @@ use super::project::project;
 use super::relax::{FoldGuard, relax_on_surface};
 use super::rng::Rng;
 use super::rough::{IosRoughness, roughen};
-use super::surface_nets::{largest_component, surface_nets};
+use super::surface_nets::{largest_component, surface_nets_split};
 use crate::mesh::TriMesh;
 use glam::{DVec2, DVec3};
 
@@ -179,7 +179,8 @@ pub fn simulate(
     let mut grid = Grid::covering(glo, ghi, h, 1);
     grid.fill(16, 2.0, |p| field.eval(p));
     grid.make_well_composed();
-    let raw = surface_nets(&grid);
+    // A rough export keeps marching-cubes-like slivers.
+    let raw = surface_nets_split(&grid, rough.is_some());
     // Crop: drop faces touching the grid's outer shell (the artificial closure).
     let (blo, bhi) = (
         grid.origin + DVec3::splat(1.5 * h),

@@ -17,16 +17,20 @@ pub enum IosExport {
     /// The project's scan: relaxed vertices, crowns cleaned of crossings, one disk per crown.
     #[default]
     Clean,
-    /// Raw surface nets at the scan spacing (~0.165 mm edges) with every roughness of
-    /// [`IosRoughness::rough`].
+    /// Raw surface nets with marching-cubes-like slivers at the scan spacing (~0.17 mm edges)
+    /// with every roughness of [`IosRoughness::rough`].
     Rough,
-    /// Rough at a coarse spacing (0.45 mm grid, ~0.4 mm edges), like a decimated export.
+    /// Rough at a coarse spacing (0.45 mm grid, ~0.45 mm mean crown edge), standing for a
+    /// decimated export (it is a coarse scan, not an edge-collapse decimation).
     Coarse,
-    /// Rough at 2x the vertex density (grid spacing / √2, ~0.12 mm edges).
+    /// Rough at 2x the vertex density (grid spacing / √2, ~0.14 mm edges), noise 0.014 mm (a
+    /// denser scanner is no noisier per vertex: the noise shrinks with the spacing).
     Dense2,
-    /// Rough at 4x the vertex density (grid spacing / 2, ~0.085 mm edges).
+    /// Rough at 4x the vertex density (grid spacing / 2, ~0.11 mm edges, like the foreign jaws),
+    /// noise 0.01 mm.
     Dense4,
-    /// Rough at 2x density, then one midpoint subdivision (~8x vertices, ~0.06 mm edges).
+    /// [`IosExport::Dense2`], then one midpoint subdivision (~8x the rough vertices, ~0.07 mm
+    /// edges, coplanar face quadruples), like a re-meshed denser export.
     Subdivided,
 }
 
@@ -80,14 +84,17 @@ impl IosExport {
             }),
             IosExport::Dense2 => Some(IosRoughness {
                 density: 2.0,
+                noise: 0.014,
                 ..rough
             }),
             IosExport::Dense4 => Some(IosRoughness {
                 density: 4.0,
+                noise: 0.01,
                 ..rough
             }),
             IosExport::Subdivided => Some(IosRoughness {
                 density: 2.0,
+                noise: 0.014,
                 subdivisions: 1,
                 ..rough
             }),
@@ -127,7 +134,7 @@ impl IosRoughness {
     pub fn rough() -> Self {
         IosRoughness {
             density: 1.0,
-            noise: 0.015,
+            noise: 0.02,
             clip_margin: true,
             subdivisions: 0,
             mesh_holes: 0.15,
