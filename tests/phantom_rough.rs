@@ -107,7 +107,9 @@ fn clipped_fraction(p: &Phantom) -> f64 {
 }
 
 /// The truth stays valid: every IOS tooth has its crown, crown vertices mapped back lie on the
-/// true surface (up to the noise and the label bleed), transforms compose.
+/// true surface (up to the noise, and the label bleed for the 10 % quantile: `q90_max`; a
+/// coarse crown has few vertices, so its bleed band of gingiva is a larger share of them),
+/// transforms compose.
 fn check_truth(p: &Phantom, what: &str, q90_max: f64) {
     let crowns = p.ios_crowns();
     for (fdi, t) in &p.truth.teeth {
@@ -127,7 +129,8 @@ fn check_truth(p: &Phantom, what: &str, q90_max: f64) {
             .map(|&q| sd.distance(back.apply(q)))
             .collect();
         d.sort_by(f64::total_cmp);
-        let q90 = d[d.len() * 9 / 10];
+        let (median, q90) = (d[d.len() / 2], d[d.len() * 9 / 10]);
+        assert!(median < 0.03, "{what} crown {fdi}: median {median} mm");
         assert!(q90 < q90_max, "{what} crown {fdi}: 90% quantile {q90} mm");
     }
     let r = p.ios.mesh.topology_report();
@@ -168,7 +171,8 @@ fn coarse_and_dense_exports_have_their_resolution() {
         .into_iter()
         .map(|e| {
             let p = generate(5, Jaw::Lower, Variant::PartialArch, e);
-            check_truth(&p, e.name(), 0.06);
+            let q90 = if e == IosExport::Coarse { 0.2 } else { 0.06 };
+            check_truth(&p, e.name(), q90);
             (e, crown_stats(&p))
         })
         .collect();
@@ -197,7 +201,7 @@ fn every_variant_and_both_jaws_have_rough_exports() {
         let jaw = if k % 2 == 0 { Jaw::Lower } else { Jaw::Upper };
         let p = generate(20 + k as u64, jaw, variant, IosExport::Coarse);
         let what = format!("coarse {} {jaw:?}", variant.name());
-        check_truth(&p, &what, 0.06);
+        check_truth(&p, &what, 0.2);
         let s = crown_stats(&p);
         assert!(s.crossings > 0 && s.slivers > 0, "{what}: {s:?}");
         let in_ios = p.truth.teeth.values().filter(|t| t.in_ios).count();
