@@ -161,7 +161,10 @@ fn rough_crowns_hold_slivers_folds_a_clipped_margin_and_label_noise() {
         let ratio = s.vertices as f64 / clean.vertices as f64;
         assert!((0.8..1.3).contains(&ratio), "{what}: {s:?} vs {clean:?}");
         let clipped = clipped_fraction(&p);
-        assert!(clipped > 0.95, "{what}: {clipped} of the margin on cut edges");
+        assert!(
+            clipped > 0.95,
+            "{what}: {clipped} of the margin on cut edges"
+        );
     }
 }
 

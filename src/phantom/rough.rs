@@ -458,12 +458,7 @@ mod tests {
 
     fn square() -> (TriMesh, Vec<i32>) {
         let m = TriMesh::new(
-            vec![
-                DVec3::ZERO,
-                DVec3::X,
-                DVec3::new(1.0, 1.0, 0.0),
-                DVec3::Y,
-            ],
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
             vec![[0, 1, 2], [0, 2, 3]],
         );
         (m, vec![11, 0, 0, 0])
