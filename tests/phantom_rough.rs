@@ -37,6 +37,8 @@ struct CrownStats {
     multi_component: usize,
     /// Crowns with more than one boundary loop (holes).
     multi_loop: usize,
+    /// Crowns with a non-manifold vertex or edge.
+    non_manifold: usize,
 }
 
 fn min_angle_deg(m: &TriMesh, t: [u32; 3]) -> f64 {
@@ -66,6 +68,7 @@ fn crown_stats(p: &Phantom) -> CrownStats {
         let r = m.topology_report();
         s.multi_component += usize::from(r.components > 1);
         s.multi_loop += usize::from(r.boundary_loops > 1);
+        s.non_manifold += usize::from(r.non_manifold_edges + r.non_manifold_vertices > 0);
     }
     s.mean_edge = edge_sum / edges.max(1) as f64;
     s
@@ -157,6 +160,7 @@ fn rough_crowns_hold_slivers_folds_a_clipped_margin_and_label_noise() {
         );
         assert!(s.crossings >= 500, "{what}: {s:?}");
         assert!(s.multi_component >= 3 && s.multi_loop >= 3, "{what}: {s:?}");
+        assert_eq!(s.non_manifold, 0, "{what}: every crown manifold: {s:?}");
         assert!((0.16..0.23).contains(&s.mean_edge), "{what}: {s:?}");
         let ratio = s.vertices as f64 / clean.vertices as f64;
         assert!((0.8..1.3).contains(&ratio), "{what}: {s:?} vs {clean:?}");
@@ -195,6 +199,7 @@ fn coarse_and_dense_exports_have_their_resolution() {
         assert!(vertex_ratio.contains(&ratio), "{what}");
         assert!(s.crossings > 0, "{what}");
         assert!(s.multi_component + s.multi_loop > 0, "{what}");
+        assert_eq!(s.non_manifold, 0, "{what}");
     }
 }
 

@@ -3,8 +3,9 @@
 //! crowns are not cleaned of the folds the noise makes, the crown/gingiva label boundary is
 //! clipped through the triangles (new vertices on the boundary curve, tiny slivers along the
 //! margin), notches reach the margin, holes are punched, the labels carry a segmentation tool's
-//! noise (tooth-labelled islands in the gingiva, gingiva-labelled holes in the crowns), and the
-//! density can be coarse, 2x, 4x or midpoint-subdivided.
+//! noise (tooth-labelled islands in the gingiva, gingiva-labelled holes in the crowns; each crown
+//! stays manifold: pinch vertices go to the gingiva), and the density can be coarse, 2x, 4x or
+//! midpoint-subdivided.
 
 use super::rng::Rng;
 use crate::mesh::TriMesh;
@@ -357,8 +358,34 @@ pub fn roughen(
     if rough.clip_margin {
         clip_labels(mesh, labels, &level);
     }
+    unpinch(mesh, labels, 8);
     for _ in 0..rough.subdivisions {
         subdivide(mesh, labels);
+    }
+}
+
+/// Relabels gingiva (0) the crown vertices where a crown's faces meet only at that vertex (the
+/// label noise can leave such pinches), until every crown is manifold or `rounds` are spent:
+/// islands and holes stay, pinches do not.
+fn unpinch(mesh: &TriMesh, labels: &mut [i32], rounds: usize) {
+    for _ in 0..rounds {
+        let Ok(parts) = crate::mesh::split_by_vertex_labels(mesh, labels) else {
+            return;
+        };
+        let mut pins = Vec::new();
+        for s in parts.values().filter(|s| s.label != 0) {
+            pins.extend(
+                crate::mesh::non_manifold_vertices(&s.mesh)
+                    .into_iter()
+                    .map(|v| s.source_vertex[v as usize]),
+            );
+        }
+        if pins.is_empty() {
+            return;
+        }
+        for v in pins {
+            labels[v as usize] = 0;
+        }
     }
 }
 
@@ -497,8 +524,8 @@ mod tests {
 
     #[test]
     fn subdivision_quadruples_faces_and_keeps_labels_inside() {
-        let (mut m, mut labels) = square();
-        labels = vec![5, 5, 5, 0];
+        let (mut m, _) = square();
+        let mut labels = vec![5, 5, 5, 0];
         subdivide(&mut m, &mut labels);
         assert_eq!(m.triangles.len(), 8);
         assert_eq!(m.positions.len(), 9);
