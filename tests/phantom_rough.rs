@@ -159,7 +159,7 @@ fn rough_crowns_hold_slivers_folds_a_clipped_margin_and_label_noise() {
             100.0 * clean_sliver
         );
         assert!(s.crossings >= 500, "{what}: {s:?}");
-        assert!(s.multi_component >= 3 && s.multi_loop >= 3, "{what}: {s:?}");
+        assert!(s.multi_component >= 2 && s.multi_loop >= 3, "{what}: {s:?}");
         assert_eq!(s.non_manifold, 0, "{what}: every crown manifold: {s:?}");
         assert!((0.16..0.23).contains(&s.mean_edge), "{what}: {s:?}");
         let ratio = s.vertices as f64 / clean.vertices as f64;

@@ -262,7 +262,7 @@ pub fn simulate(
         if realism.holes > 0 {
             punch_holes(&mut mesh, &mut labels, Some(&mut level), realism.holes, rng);
         }
-        roughen(&mut mesh, &mut labels, level, &fdis, occ, r, rng);
+        roughen(&mut mesh, &mut labels, level, &fdis, occ, h, r, rng);
         let margins = teeth
             .iter()
             .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))

@@ -123,10 +123,11 @@ pub struct IosRoughness {
     pub mesh_holes: f64,
     /// Notches (0.3–0.5 mm radius) cut through the mesh across the margin, per tooth.
     pub margin_notches: f64,
-    /// Stray tooth-labelled islands (0.12–0.3 mm radius) in the gingiva 0.5–1 mm off a crown,
-    /// per tooth.
+    /// Stray tooth-labelled islands (0.12–0.3 mm radius, at least the grid spacing) in the
+    /// gingiva 0.5–1 mm beyond their radius off a crown, per tooth.
     pub label_islands: f64,
-    /// Gingiva-labelled holes (0.1–0.3 mm radius) inside crowns, per tooth.
+    /// Gingiva-labelled holes (0.1–0.3 mm radius, at least the grid spacing) inside crowns, per
+    /// tooth.
     pub label_holes: f64,
 }
 
@@ -238,13 +239,17 @@ fn cut_faces_near_point(mesh: &mut TriMesh, c: DVec3, r: f64) {
 /// Makes a labelled, relaxation-free IOS jaw rough (see [`IosRoughness`]): holes and notches
 /// through the mesh, crowns made disks, label noise, per-vertex noise, the margin clipped
 /// through the triangles, subdivisions. `level` is the labelling level per vertex (negative on
-/// the tooth side of the label boundary); `fdis` are the IOS teeth; `occ` the occlusal direction.
+/// the tooth side of the label boundary); `fdis` are the IOS teeth; `occ` the occlusal direction;
+/// `h` the grid spacing (label islands and holes are at least that wide, so that they hold
+/// faces on a coarse mesh).
+#[allow(clippy::too_many_arguments)]
 pub fn roughen(
     mesh: &mut TriMesh,
     labels: &mut Vec<i32>,
     mut level: Vec<f64>,
     fdis: &[u8],
     occ: DVec3,
+    h: f64,
     rough: &IosRoughness,
     rng: &mut Rng,
 ) {
@@ -282,7 +287,8 @@ pub fn roughen(
     for _ in 0..IosRoughness::count(rough.label_islands, n_teeth) {
         let fdi = pick_tooth(rng);
         let edge = boundary_of(&adj, labels, fdi);
-        let (off, r) = (rng.range(0.5, 1.0), rng.range(0.12, 0.3));
+        let r = rng.range(0.12, 0.3).max(h);
+        let off = rng.range(0.5, 1.0) + r;
         if edge.is_empty() {
             continue;
         }
@@ -315,7 +321,7 @@ pub fn roughen(
     }
     for _ in 0..IosRoughness::count(rough.label_holes, n_teeth) {
         let fdi = pick_tooth(rng);
-        let r = rng.range(0.1, 0.3);
+        let r = rng.range(0.1, 0.3).max(h);
         // Hops from the crown's label boundary, within the crown.
         let mut hops = vec![u32::MAX; labels.len()];
         let mut queue: std::collections::VecDeque<u32> =
