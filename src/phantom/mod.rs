@@ -71,10 +71,10 @@
 //! - Rough exports (`cargo run --release --example ios_roughness -- 1 upper full`, seed 1 upper
 //!   full arch; per jaw: IOS vertices, mean crown edge, crown faces with a corner under 5°,
 //!   crossing crown face pairs by the exact test, crowns with >1 component / >1 boundary loop):
-//!   clean 200.6k, 0.161 mm, 0.0 %, 0, 0 / 0; rough 207.5k, 0.197 mm, 6.9 %, 15 685, 7 / 13;
-//!   coarse 35.0k, 0.46 mm, 7.8 %, 414, 4 / 9; dense2 411.9k, 0.140 mm, 6.7 %, 28 253, 8 / 13;
-//!   dense4 822.8k, 0.100 mm, 6.5 %, 56 963, 8 / 11; subdivided 1.64M, 0.070 mm, 6.7 %,
-//!   75 898, 8 / 13 (seed 2 lower: within a few % of these).
+//!   clean 200.6k, 0.161 mm, 0.0 %, 0, 0 / 0; rough 207.5k, 0.197 mm, 6.9 %, 15 672, 4 / 11;
+//!   coarse 35.1k, 0.46 mm, 7.7 %, 397, 4 / 10; dense2 411.9k, 0.140 mm, 6.7 %, 28 241, 5 / 13;
+//!   dense4 822.8k, 0.100 mm, 6.5 %, 56 944, 6 / 11; subdivided 1.64M, 0.070 mm, 6.7 %,
+//!   75 874, 5 / 13 (seed 2 lower: the same within a few %, but 0 coarse crowns with islands).
 //!   The foreign jaws (`../shared/data/foreign`, same measure): 316k / 275k vertices, 0.120 mm,
 //!   3.1 %, 15 603 / 13 421 crossing pairs, 0 / 0. Generation CPU (`toothfuse demo --seed 1
 //!   --ios-export E`, user time): clean 4.2 s, rough 3.5 s (no relaxation, no crown cleaning),
