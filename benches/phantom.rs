@@ -1,10 +1,11 @@
-//! Generation time of the synthetic jaw (a full arch, both jaws). Target: under 5 s each in
-//! release mode on a 2-core machine, single-threaded.
+//! Generation time of the synthetic jaw (a full arch, both jaws; and the rough export of the
+//! upper one). Target: under 5 s each in release mode on a 2-core machine, single-threaded; a
+//! rough jaw no dearer than a clean one.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use toothfuse::arch::Jaw;
-use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
 
 fn bench_phantom(c: &mut Criterion) {
     let mut g = c.benchmark_group("phantom");
@@ -20,6 +21,16 @@ fn bench_phantom(c: &mut Criterion) {
             b.iter(|| black_box(Phantom::generate(black_box(&opts)).expect("phantom")))
         });
     }
+    let mut rough = PhantomOptions {
+        seed: 1,
+        jaw: Jaw::Upper,
+        variant: Variant::Full,
+        ..Default::default()
+    };
+    rough.realism.ios.rough = IosExport::Rough.roughness();
+    g.bench_function("generate_full_upper_rough", |b| {
+        b.iter(|| black_box(Phantom::generate(black_box(&rough)).expect("phantom")))
+    });
     g.finish();
 }
 

@@ -14,7 +14,8 @@ use super::layout::PlacedTooth;
 use super::project::project;
 use super::relax::{FoldGuard, relax_on_surface};
 use super::rng::Rng;
-use super::surface_nets::{largest_component, surface_nets};
+use super::rough::{IosRoughness, roughen};
+use super::surface_nets::{largest_component, surface_nets_split};
 use crate::mesh::TriMesh;
 use glam::{DVec2, DVec3};
 
@@ -31,6 +32,8 @@ pub struct IosRealism {
     pub notches: bool,
     /// Number of small holes punched into random crowns (0 = none).
     pub holes: usize,
+    /// A rough export instead of the clean scan (`None`: clean; see [`super::IosExport::roughness`]).
+    pub rough: Option<IosRoughness>,
 }
 
 impl Default for IosRealism {
@@ -41,6 +44,7 @@ impl Default for IosRealism {
             label_bleed: 0.25,
             notches: true,
             holes: 0,
+            rough: None,
         }
     }
 }
@@ -167,11 +171,16 @@ pub fn simulate(
         boxes,
         gum: &gum,
     };
-    let h = realism.spacing;
+    let rough = realism.rough.as_ref();
+    let h = match rough {
+        Some(r) => realism.spacing / r.density.max(1e-3).sqrt(),
+        None => realism.spacing,
+    };
     let mut grid = Grid::covering(glo, ghi, h, 1);
     grid.fill(16, 2.0, |p| field.eval(p));
     grid.make_well_composed();
-    let raw = surface_nets(&grid);
+    // A rough export keeps marching-cubes-like slivers.
+    let raw = surface_nets_split(&grid, rough.is_some());
     // Crop: drop faces touching the grid's outer shell (the artificial closure).
     let (blo, bhi) = (
         grid.origin + DVec3::splat(1.5 * h),
@@ -216,25 +225,14 @@ pub fn simulate(
             .collect(),
     );
     let mut mesh = largest_component(&cropped);
-    // A scanner spreads its vertices evenly: no surface-nets slivers.
     let guard = FoldGuard::new(&mesh);
-    let near: Vec<Vec<usize>> = mesh
-        .positions
-        .iter()
-        .map(|&p| field.teeth_near(p, 2.0 * h))
-        .collect();
-    // Only near the teeth: the gingiva further away never becomes crown.
-    let movable: Vec<bool> = near.iter().map(|n| !n.is_empty()).collect();
-    relax_on_surface(
-        &mut mesh,
-        &guard,
-        &|v, p| field.eval_among(p, &near[v]),
-        &movable,
-        0.5 * h,
-        2,
-    );
-    // Labels with bleed; crown vertices projected onto their tooth.
+    if rough.is_none() {
+        relax(&mut mesh, &guard, &field, h);
+    }
+    // Labels with bleed; crown vertices projected onto their tooth. `level` is negative on the
+    // tooth side of the label boundary (used to clip a rough export through it).
     let mut labels = vec![0i32; mesh.positions.len()];
+    let mut level = vec![0.0f64; if rough.is_some() { labels.len() } else { 0 }];
     for (v, label) in labels.iter_mut().enumerate() {
         let p = mesh.positions[v];
         let (g, best, tv) = field.parts(p);
@@ -247,34 +245,33 @@ pub fn simulate(
         if tv <= g + bleed && tv < 1.0 {
             *label = t.fdi as i32;
         }
-        if tv < g {
-            guard.try_move(&mut mesh, v, project(p, &|q| t.tooth.eval(q), h));
+        if rough.is_some() {
+            level[v] = if tv < 1.0 { tv - (g + bleed) } else { 1.0 };
         }
+        if tv < g {
+            let q = project(p, &|q| t.tooth.eval(q), h);
+            if rough.is_some() {
+                mesh.positions[v] = q; // raw: no guard against folds
+            } else {
+                guard.try_move(&mut mesh, v, q);
+            }
+        }
+    }
+    if let Some(r) = rough {
+        let fdis: Vec<u8> = teeth.iter().map(|t| t.fdi).collect();
+        if realism.holes > 0 {
+            punch_holes(&mut mesh, &mut labels, Some(&mut level), realism.holes, rng);
+        }
+        roughen(&mut mesh, &mut labels, level, &fdis, occ, h, r, rng);
+        let margins = teeth
+            .iter()
+            .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))
+            .collect();
+        return (mesh, labels, margins);
     }
     // Small holes in random crowns.
     if realism.holes > 0 {
-        let crown_vertices: Vec<usize> = (0..labels.len()).filter(|&v| labels[v] != 0).collect();
-        let mut tris = mesh.triangles.clone();
-        for _ in 0..realism.holes {
-            if crown_vertices.is_empty() {
-                break;
-            }
-            let c = mesh.positions[crown_vertices[rng.below(crown_vertices.len())]];
-            let r = rng.range(0.25, 0.5);
-            tris.retain(|t| {
-                t.iter()
-                    .all(|&v| (mesh.positions[v as usize] - c).length() > r)
-            });
-        }
-        mesh.triangles = tris;
-        let map = mesh.compact();
-        let mut nl = vec![0; mesh.positions.len()];
-        for (old, &new) in map.iter().enumerate() {
-            if new != u32::MAX {
-                nl[new as usize] = labels[old];
-            }
-        }
-        labels = nl;
+        punch_holes(&mut mesh, &mut labels, None, realism.holes, rng);
     }
     // Measurement noise.
     if realism.noise > 0.0 {
@@ -293,6 +290,65 @@ pub fn simulate(
         .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))
         .collect();
     (mesh, labels, margins)
+}
+
+/// A scanner spreads its vertices evenly: no surface-nets slivers. Relaxes the vertices near
+/// the teeth (the gingiva further away never becomes crown) on the field's surface.
+fn relax(mesh: &mut TriMesh, guard: &FoldGuard, field: &Field<'_>, h: f64) {
+    let near: Vec<Vec<usize>> = mesh
+        .positions
+        .iter()
+        .map(|&p| field.teeth_near(p, 2.0 * h))
+        .collect();
+    let movable: Vec<bool> = near.iter().map(|n| !n.is_empty()).collect();
+    relax_on_surface(
+        mesh,
+        guard,
+        &|v, p| field.eval_among(p, &near[v]),
+        &movable,
+        0.5 * h,
+        2,
+    );
+}
+
+/// Punches `holes` small holes (0.25–0.5 mm radius) into random crowns and drops the vertices
+/// left unused, carrying the labels (and `level`, when given) along.
+fn punch_holes(
+    mesh: &mut TriMesh,
+    labels: &mut Vec<i32>,
+    level: Option<&mut Vec<f64>>,
+    holes: usize,
+    rng: &mut Rng,
+) {
+    let crown_vertices: Vec<usize> = (0..labels.len()).filter(|&v| labels[v] != 0).collect();
+    let mut tris = mesh.triangles.clone();
+    for _ in 0..holes {
+        if crown_vertices.is_empty() {
+            break;
+        }
+        let c = mesh.positions[crown_vertices[rng.below(crown_vertices.len())]];
+        let r = rng.range(0.25, 0.5);
+        tris.retain(|t| {
+            t.iter()
+                .all(|&v| (mesh.positions[v as usize] - c).length() > r)
+        });
+    }
+    mesh.triangles = tris;
+    let map = mesh.compact();
+    let mut nl = vec![0; mesh.positions.len()];
+    let mut nv = vec![0.0; if level.is_some() { nl.len() } else { 0 }];
+    for (old, &new) in map.iter().enumerate() {
+        if new != u32::MAX {
+            nl[new as usize] = labels[old];
+            if let Some(l) = &level {
+                nv[new as usize] = l[old];
+            }
+        }
+    }
+    *labels = nl;
+    if let Some(l) = level {
+        *l = nv;
+    }
 }
 
 fn seg_dist(p: DVec3, a: DVec3, b: DVec3) -> f64 {

@@ -27,6 +27,19 @@
 //!   above the contact down into the papilla) where the scanner misses the contact; optional
 //!   holes ([`IosRealism::holes`], off by default); a repair pass makes every crown an open disk
 //!   (one component, manifold, one boundary loop); clamped Gaussian noise σ = 0.01 mm.
+//! - **Rough exports** (`rough`, [`IosExport`], [`IosRoughness`]; off by default, the clean scan
+//!   above is unchanged bit for bit): what other scanners and segmentation tools deliver. Surface
+//!   nets with marching-cubes-like slivers (each vertex pulled 70 % of the way to its cell's edge
+//!   crossing nearest a grid corner, quads split along the longer diagonal), no relaxation, no
+//!   crown cleaning; holes through crowns and notches (0.3–0.5 mm) across the margin; crowns
+//!   made disks, then a segmentation tool's label noise on top: tooth-labelled islands in the
+//!   gingiva 0.5–1 mm off a crown and gingiva-labelled holes inside crowns; isotropic noise
+//!   σ = 0.02 mm (0.014 at 2x density, 0.01 at 4x) that folds the slivers; the label boundary
+//!   clipped through the triangles (each edge between differently labelled vertices cut where
+//!   the labelling level crosses zero, clamped to 1–99 % of the edge, a new vertex with the
+//!   tooth's label: crowns end on the cut curve with slivers along it); `coarse` (0.45 mm grid),
+//!   `dense2`/`dense4` (2x/4x the vertices), `subdivided` (dense2 then one midpoint
+//!   subdivision). Only the IOS changes: CBCT, transforms and true surfaces are the clean jaw's.
 //! - **Drift** (`drift`): from a random distal end, each tooth adds a persistent-plus-noise rigid
 //!   increment about its crown centre: ~0.4–0.6° and ~0.15–0.25 mm at the far end
 //!   ([`Variant::HeavyDrift`]: 4×).
@@ -55,6 +68,17 @@
 //!   measured 9.7 s upper / 7.8 s lower wall time while the 2-core machine ran at load ~7).
 //! - Real anatomy (Open-Full-Jaw p26 mandible, 14 teeth): CBCT RMS 0.21 mm, max 0.70 mm;
 //!   IOS 180k vertices.
+//! - Rough exports (`cargo run --release --example ios_roughness -- 1 upper full`, seed 1 upper
+//!   full arch; per jaw: IOS vertices, mean crown edge, crown faces with a corner under 5°,
+//!   crossing crown face pairs by the exact test, crowns with >1 component / >1 boundary loop):
+//!   clean 200.6k, 0.161 mm, 0.0 %, 0, 0 / 0; rough 207.5k, 0.197 mm, 6.9 %, 15 672, 4 / 11;
+//!   coarse 35.1k, 0.46 mm, 7.7 %, 397, 4 / 10; dense2 411.9k, 0.140 mm, 6.7 %, 28 241, 5 / 13;
+//!   dense4 822.8k, 0.100 mm, 6.5 %, 56 944, 6 / 11; subdivided 1.64M, 0.070 mm, 6.7 %,
+//!   75 874, 5 / 13 (seed 2 lower: the same within a few %, but 0 coarse crowns with islands).
+//!   The foreign jaws (`../shared/data/foreign`, same measure): 316k / 275k vertices, 0.120 mm,
+//!   3.1 %, 15 603 / 13 421 crossing pairs, 0 / 0. Generation CPU (`toothfuse demo --seed 1
+//!   --ios-export E`, user time): clean 4.2 s, rough 3.5 s (no relaxation, no crown cleaning),
+//!   coarse 1.6 s, dense2 5.8 s, dense4 10.9 s, subdivided 6.1 s.
 
 mod cbct;
 mod crown_clean;
@@ -69,12 +93,14 @@ mod project;
 mod real;
 mod relax;
 pub mod rng;
+mod rough;
 mod shape;
 mod surface_nets;
 
 pub use cbct::CbctRealism;
 pub use grid::Grid;
 pub use ios::IosRealism;
+pub use rough::{IosExport, IosRoughness};
 pub use surface_nets::{extract_closed, largest_component, surface_nets};
 
 use crate::arch::Jaw;

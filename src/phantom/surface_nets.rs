@@ -26,6 +26,15 @@ const EDGES: [(usize, usize); 12] = [
 /// Extracts the zero level set of `grid` (negative inside). Call
 /// [`Grid::make_well_composed`] first for a manifold result. Returns the mesh (all components).
 pub fn surface_nets(grid: &Grid) -> TriMesh {
+    surface_nets_split(grid, false)
+}
+
+/// [`surface_nets`], or when `rough` the same topology with the slivers of a marching-cubes
+/// export: each vertex moved 70 % of the way from the mean of its cell's edge crossings to the
+/// crossing nearest a grid corner (where the surface passes near a corner, the cells around it
+/// crowd their vertices there, as marching cubes' edge vertices do), and each quad split along
+/// its longer diagonal.
+pub fn surface_nets_split(grid: &Grid, rough: bool) -> TriMesh {
     let [nx, ny, nz] = grid.dims;
     let v = &grid.values;
     // Pass 1: vertices of sign-changing cells, in cell index order.
@@ -44,6 +53,7 @@ pub fn surface_nets(grid: &Grid) -> TriMesh {
                 }
                 let mut sum = DVec3::ZERO;
                 let mut cnt = 0.0;
+                let mut near_corner = (f64::INFINITY, DVec3::ZERO);
                 for &(a, b) in &EDGES {
                     let (va, vb) = (vals[a] as f64, vals[b] as f64);
                     if (va < 0.0) != (vb < 0.0) {
@@ -52,11 +62,18 @@ pub fn surface_nets(grid: &Grid) -> TriMesh {
                         let pb = corner(b);
                         sum += pa + (pb - pa) * t;
                         cnt += 1.0;
+                        if t.min(1.0 - t) < near_corner.0 {
+                            near_corner = (t.min(1.0 - t), pa + (pb - pa) * t);
+                        }
                     }
+                }
+                let mut local = sum / cnt;
+                if rough {
+                    local += (near_corner.1 - local) * 0.7;
                 }
                 cells.push(grid.idx(i, j, k));
                 positions.push(
-                    grid.origin + (DVec3::new(i as f64, j as f64, k as f64) + sum / cnt) * grid.h,
+                    grid.origin + (DVec3::new(i as f64, j as f64, k as f64) + local) * grid.h,
                 );
             }
         }
@@ -109,7 +126,7 @@ pub fn surface_nets(grid: &Grid) -> TriMesh {
                 q.reverse();
             }
             let p: [DVec3; 4] = std::array::from_fn(|n| positions[q[n] as usize]);
-            if (p[0] - p[2]).length_squared() <= (p[1] - p[3]).length_squared() {
+            if ((p[0] - p[2]).length_squared() <= (p[1] - p[3]).length_squared()) != rough {
                 tris.push([q[0], q[1], q[2]]);
                 tris.push([q[0], q[2], q[3]]);
             } else {

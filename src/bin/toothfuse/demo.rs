@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
-use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
 
 /// Options shared by every command that builds a synthetic jaw.
 #[derive(Args, Clone, Debug)]
@@ -21,6 +21,12 @@ pub struct PhantomArgs {
     /// Scenario: full, missing, partial, metal or drift.
     #[arg(long, default_value = "full", value_parser = ["full", "missing", "partial", "metal", "drift"])]
     pub variant: String,
+    /// IOS export: clean (the project's scan), or a rough export (raw slivers, folds, margin
+    /// clipped through triangles, notches, holes, label noise) at the scan density (rough), at
+    /// ~0.4 mm edges (coarse), 2x or 4x the vertices (dense2, dense4), or 2x then midpoint-
+    /// subdivided (subdivided, ~0.06 mm edges).
+    #[arg(long, default_value = "clean", value_parser = ["clean", "rough", "coarse", "dense2", "dense4", "subdivided"])]
+    pub ios_export: String,
 }
 
 impl PhantomArgs {
@@ -34,12 +40,17 @@ impl PhantomArgs {
         let Some(variant) = Variant::from_name(&self.variant) else {
             bail!("unknown variant {:?}", self.variant);
         };
-        Ok(PhantomOptions {
+        let Some(export) = IosExport::from_name(&self.ios_export) else {
+            bail!("unknown IOS export {:?}", self.ios_export);
+        };
+        let mut opts = PhantomOptions {
             seed: self.seed,
             jaw,
             variant,
             ..PhantomOptions::default()
-        })
+        };
+        opts.realism.ios.rough = export.roughness();
+        Ok(opts)
     }
 
     /// Generates the jaw.

@@ -8,7 +8,7 @@ use clap::Args;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use toothfuse::eval::{ablation, cases, run as run_ablation};
-use toothfuse::phantom::Phantom;
+use toothfuse::phantom::{IosExport, Phantom};
 use toothfuse::pipeline::{self, PipelineOptions, accuracy::fusion_accuracy};
 
 /// `toothfuse eval` arguments.
@@ -23,6 +23,9 @@ pub struct EvalArgs {
     /// Skip the fusion accuracy table (registration only).
     #[arg(long)]
     no_fusion: bool,
+    /// IOS export of every jaw (see `toothfuse demo --help`).
+    #[arg(long, default_value = "clean", value_parser = ["clean", "rough", "coarse", "dense2", "dense4", "subdivided"])]
+    ios_export: String,
 }
 
 fn parse_seeds(s: &str) -> Result<(u64, usize)> {
@@ -44,7 +47,13 @@ fn parse_seeds(s: &str) -> Result<(u64, usize)> {
 /// Runs `toothfuse eval`.
 pub fn run(a: &EvalArgs) -> Result<()> {
     let (first, n) = parse_seeds(&a.seeds)?;
-    let cs = cases(first, n);
+    let Some(export) = IosExport::from_name(&a.ios_export) else {
+        bail!("unknown IOS export {:?}", a.ios_export);
+    };
+    let mut cs = cases(first, n);
+    for c in &mut cs {
+        c.realism.ios.rough = export.roughness();
+    }
     let mut md = run_ablation(&cs, &ablation())?.to_markdown();
     if !a.no_fusion {
         md.push('\n');
