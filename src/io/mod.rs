@@ -10,6 +10,7 @@ mod obj;
 mod ply;
 mod stl;
 mod teeth;
+pub mod volume;
 mod vtk_legacy;
 mod vtp;
 mod vtp_data;
@@ -20,6 +21,7 @@ pub use stl::{read_stl_bytes, write_stl};
 pub use teeth::{
     LabelScheme, fdi_to_universal, read_teeth, read_teeth_with, universal_to_fdi, write_teeth_dir,
 };
+pub use volume::{VolumeFile, VolumeHeader, is_volume_path, read_label_volume};
 pub use vtk_legacy::read_vtk_legacy_bytes;
 pub use vtp::{VtpEncoding, read_vtp_bytes, write_vtp};
 
