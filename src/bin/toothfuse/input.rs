@@ -9,6 +9,7 @@ use toothfuse::io::LabelScheme;
 use toothfuse::mesh::LabeledMesh;
 use toothfuse::pipeline::PipelineOptions;
 use toothfuse::register::{OutputFrame, Preset};
+use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
 
 /// Inputs and options shared by `register` and `fuse`.
 #[derive(Args, Clone, Debug)]
@@ -17,9 +18,18 @@ pub struct InputArgs {
     /// of tooth_<n> crown files. Without --ios/--cbct: the built-in synthetic jaw.
     #[arg(long, requires = "cbct")]
     pub ios: Option<PathBuf>,
-    /// CBCT teeth: a labeled mesh or a folder of tooth_<n>.stl/.ply/... files.
+    /// CBCT teeth: a labeled mesh, a folder of tooth_<n>.stl/.ply/... files, or a label volume
+    /// (.nii, .nii.gz, .nrrd, .seg.nrrd) with one label per tooth, surfaced here.
     #[arg(long, requires = "ios")]
     pub cbct: Option<PathBuf>,
+    /// Numbering of a CBCT label volume's values: fdi (STS 2024 and most tooth models),
+    /// universal (1-32) or toothfairy2 (teeth at FDI numbers, other structures skipped).
+    #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "toothfairy2"])]
+    pub cbct_classes: String,
+    /// World frame the CBCT label volume is expressed in (and so the fused teeth, with
+    /// --frame cbct): lps (DICOM, ITK, 3D Slicer files) or ras (NIfTI, Slicer's scene).
+    #[arg(long, default_value = "lps", value_parser = ["lps", "ras"])]
+    pub cbct_frame: String,
     /// Tooth numbering of the input labels and file names.
     #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "meshlabeler"])]
     pub labels: String,
@@ -63,9 +73,38 @@ impl InputArgs {
         };
         let scheme = self.scheme();
         let ios = read_ios(ios, scheme)?;
-        let cbct_teeth = toothfuse::io::read_teeth_with(cbct, scheme)
-            .with_context(|| format!("reading CBCT {}", cbct.display()))?;
+        let cbct_teeth = if toothfuse::io::is_volume_path(cbct) {
+            self.read_volume_teeth(cbct)?
+        } else {
+            toothfuse::io::read_teeth_with(cbct, scheme)
+                .with_context(|| format!("reading CBCT {}", cbct.display()))?
+        };
         Ok(Some((ios, cbct_teeth)))
+    }
+
+    /// The teeth of a CBCT label volume, surfaced in the --cbct-frame world; skipped labels
+    /// (fragments, non-tooth structures) are named on stderr.
+    fn read_volume_teeth(&self, path: &Path) -> Result<BTreeMap<u8, TriMesh>> {
+        let frame = Frame::from_name(&self.cbct_frame).unwrap_or_default();
+        let scheme = VolumeScheme::from_name(&self.cbct_classes).unwrap_or_default();
+        let vf = toothfuse::io::read_label_volume(path, frame)
+            .with_context(|| format!("reading CBCT volume {}", path.display()))?;
+        let t = surface_teeth(&vf.volume, scheme, &SurfaceOptions::default())
+            .with_context(|| format!("surfacing the teeth of {}", path.display()))?;
+        for (label, why) in &t.skipped {
+            eprintln!("note: {}: label {label} skipped: {why}", path.display());
+        }
+        for (fdi, tooth) in &t.teeth {
+            if tooth.touches_border {
+                eprintln!(
+                    "note: {}: tooth {fdi} (label {}) reaches the edge of the volume: it may be cut \
+                     by the field of view",
+                    path.display(),
+                    tooth.label
+                );
+            }
+        }
+        Ok(t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect())
     }
 }
 
