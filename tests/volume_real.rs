@@ -124,7 +124,10 @@ fn sts2024_mask_surfaces_every_tooth_closed_on_the_iso_level() {
         // Volume of the surface vs the voxel count.
         let vox = tooth.voxels as f64 * 0.25f64.powi(3);
         let vol = tooth.mesh.signed_volume();
-        assert!((vol - vox).abs() / vox < 0.05, "tooth {fdi}: {vol} vs {vox} mm^3");
+        assert!(
+            (vol - vox).abs() / vox < 0.05,
+            "tooth {fdi}: {vol} vs {vox} mm^3"
+        );
         let d = iso_distances(v, tooth.label, &tooth.mesh);
         all.extend(d);
     }
@@ -144,7 +147,12 @@ fn sts2024_mask_surfaces_every_tooth_closed_on_the_iso_level() {
     // The affine is a proper rotation (no mirror), so no frame choice undoes it; the teeth are
     // still a consistent arch, which is all the fusion needs.
     assert!(DMat3::from_mat4(v.voxel_to_world).determinant() > 0.0);
-    assert!(c(12).x > c(22).x + 10.0 && c(42).x > c(32).x + 10.0, "{} {}", c(12), c(22));
+    assert!(
+        c(12).x > c(22).x + 10.0 && c(42).x > c(32).x + 10.0,
+        "{} {}",
+        c(12),
+        c(22)
+    );
 }
 
 #[test]
@@ -163,7 +171,13 @@ fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
     let got: Vec<(u16, usize)> = counts.into_iter().collect();
     assert_eq!(
         got,
-        vec![(1, 1_446_339), (2, 309_911), (3, 75_300), (4, 63_081), (5, 6_655)]
+        vec![
+            (1, 1_446_339),
+            (2, 309_911),
+            (3, 75_300),
+            (4, 63_081),
+            (5, 6_655)
+        ]
     );
     // Per-tooth surfacing refuses it, naming the classes.
     let e = surface_teeth(v, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap_err();
@@ -194,10 +208,19 @@ fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
     // in the maxilla's and the lower in the mandible's.
     assert!(cu.z > cl.z + 5.0, "upper {cu} lower {cl}");
     let inside = |p: DVec3, (lo, hi): (DVec3, DVec3)| p.cmpge(lo).all() && p.cmple(hi).all();
-    assert!(inside(cu, world_box(1)), "upper teeth centroid {cu} outside the maxilla box");
-    assert!(inside(cl, world_box(2)), "lower teeth centroid {cl} outside the mandible box");
+    assert!(
+        inside(cu, world_box(1)),
+        "upper teeth centroid {cu} outside the maxilla box"
+    );
+    assert!(
+        inside(cl, world_box(2)),
+        "lower teeth centroid {cl} outside the mandible box"
+    );
     // Teeth are anterior of the canal's mean (LPS: anterior = -y).
     let canal = toothfuse::volume::surface_label(v, 5, 1).unwrap();
     let cc = toothfuse::geom::centroid(&canal.positions).unwrap();
-    assert!(cl.y < cc.y, "lower teeth {cl} should be anterior of the canal {cc}");
+    assert!(
+        cl.y < cc.y,
+        "lower teeth {cl} should be anterior of the canal {cc}"
+    );
 }

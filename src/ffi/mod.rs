@@ -22,6 +22,7 @@ pub mod session;
 pub mod stages;
 pub mod status;
 pub mod version;
+pub mod volume;
 
 pub use fuse::*;
 pub use mesh::*;
@@ -30,3 +31,4 @@ pub use session::*;
 pub use stages::*;
 pub use status::*;
 pub use version::*;
+pub use volume::*;

@@ -4,8 +4,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use toothfuse::TriMesh;
-use toothfuse::volume::{Frame, VolumeScheme};
 use toothfuse::mesh::{SubMesh, split_by_face_labels, split_by_vertex_labels};
+use toothfuse::volume::{Frame, VolumeScheme};
 
 /// `toothfuse info` arguments.
 #[derive(Args, Debug)]
@@ -41,7 +41,11 @@ fn volume_info(a: &InfoArgs) -> Result<()> {
         "orientation: voxel axes {} (from the {}), {}; world frame {}",
         v.axis_codes(),
         h.orientation_source,
-        if v.is_oblique() { "oblique" } else { "axis-aligned" },
+        if v.is_oblique() {
+            "oblique"
+        } else {
+            "axis-aligned"
+        },
         frame.name()
     );
     let m = h.full_voxel_to_world;
