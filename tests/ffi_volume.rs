@@ -27,6 +27,7 @@ fn ball(label: i32) -> Vec<i32> {
     v
 }
 
+#[allow(clippy::too_many_arguments)]
 fn add(
     s: &Session,
     dims: &[usize; 3],

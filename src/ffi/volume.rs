@@ -54,18 +54,21 @@ unsafe fn read_labels(
             })
             .collect()
     }
-    // SAFETY (all arms): the caller guarantees `count` readable, aligned values of that type.
     match label_type {
         TOOTHFUSE_LABEL_TYPE_UINT8 => {
+            // SAFETY: the caller guarantees `count` readable u8 at `labels`.
             convert(unsafe { slice_in(labels.cast::<u8>(), count, "labels") }?)
         }
         TOOTHFUSE_LABEL_TYPE_UINT16 => {
+            // SAFETY: the caller guarantees `count` readable, aligned u16 at `labels`.
             Ok(unsafe { slice_in(labels.cast::<u16>(), count, "labels") }?.to_vec())
         }
         TOOTHFUSE_LABEL_TYPE_INT16 => {
+            // SAFETY: the caller guarantees `count` readable, aligned i16 at `labels`.
             convert(unsafe { slice_in(labels.cast::<i16>(), count, "labels") }?)
         }
         TOOTHFUSE_LABEL_TYPE_INT32 => {
+            // SAFETY: the caller guarantees `count` readable, aligned i32 at `labels`.
             convert(unsafe { slice_in(labels.cast::<i32>(), count, "labels") }?)
         }
         other => Err(Failure::invalid(format!(

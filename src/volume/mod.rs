@@ -206,9 +206,9 @@ impl LabelVolume {
             }
             let p = [id % nx, (id / nx) % ny, id / (nx * ny)];
             let b = boxes.entry(l).or_insert((p, p));
-            for a in 0..3 {
-                b.0[a] = b.0[a].min(p[a]);
-                b.1[a] = b.1[a].max(p[a]);
+            for (a, &pa) in p.iter().enumerate() {
+                b.0[a] = b.0[a].min(pa);
+                b.1[a] = b.1[a].max(pa);
             }
         }
         boxes

@@ -188,8 +188,7 @@ fn volume_dims(name: &str, h: &Header) -> Result<[usize; 3]> {
         return Err(Error::Io(format!("{name}: dim[0] = {nd} (expected 1-7)")));
     }
     let mut d = [1usize; 3];
-    for a in 0..nd as usize {
-        let n = h.dims[a + 1];
+    for (a, &n) in h.dims[1..=nd as usize].iter().enumerate() {
         if n < 1 {
             return Err(Error::Io(format!(
                 "{name}: dim[{}] = {n} (must be ≥ 1)",
