@@ -163,8 +163,11 @@ fn fuse_from_the_sts_mask_file() {
             .map(|x| x.as_f64().unwrap())
             .collect();
         let ios_to_cbct = Rigid::from_row_major(&m.try_into().unwrap());
-        // The CBCT frame is the mask's world here: world_to_cbct is the identity.
-        tre.push(p.truth.teeth[&fdi].tre(&Rigid::IDENTITY, &ios_to_cbct.inverse()));
+        // The CBCT frame of the file is the phantom's world; the truth's CBCT->IOS mapping is
+        // from the phantom's own CBCT frame, so the estimate is expressed from there.
+        let w2c = p.truth.world_to_cbct;
+        let est = ios_to_cbct.inverse().compose(&w2c.inverse());
+        tre.push(p.truth.teeth[&fdi].tre(&w2c, &est));
     }
     let mean = tre.iter().sum::<f64>() / tre.len() as f64;
     eprintln!(

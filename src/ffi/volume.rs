@@ -114,8 +114,8 @@ fn decode_volume_scheme(s: toothfuse_volume_scheme) -> FfiResult<VolumeScheme> {
 /// # Safety
 /// `session` must be NULL or a live session; the pointers must be NULL or hold the documented
 /// number of readable (or, for `teeth_added_out`, writable) values.
-#[unsafe(no_mangle)]
 #[allow(clippy::too_many_arguments)]
+#[unsafe(no_mangle)]
 pub unsafe extern "C" fn toothfuse_session_add_label_volume(
     session: *mut toothfuse_session,
     dims: *const usize,
