@@ -47,8 +47,8 @@ pub struct VolumeFile {
     pub header: VolumeHeader,
 }
 
-/// True for paths a volume reader handles: `.nii`, `.nii.gz`, `.nrrd`, `.seg.nrrd`, `.nhdr` is
-/// not supported (detached data).
+/// True for paths a volume reader handles: `.nii`, `.nii.gz`, `.nrrd` and `.seg.nrrd`
+/// (case-insensitive). Detached headers (`.nhdr`, `.hdr`/`.img`) are not supported.
 pub fn is_volume_path(path: &Path) -> bool {
     let n = path
         .file_name()
@@ -189,11 +189,13 @@ pub(crate) fn read_slices(
         })?;
         let mut labels = vec![0u16; plane];
         let mut any = false;
+        let size = dec.elem.size();
         for (n, out) in labels.iter_mut().enumerate() {
-            let raw = dec.elem.get(&buf, n, dec.big_endian);
-            if raw == 0.0 && dec.inter == 0.0 {
+            // Background (all-zero bytes: 0 in every element type) is most of a CBCT mask.
+            if dec.inter == 0.0 && buf[n * size..(n + 1) * size].iter().all(|&b| b == 0) {
                 continue;
             }
+            let raw = dec.elem.get(&buf, n, dec.big_endian);
             let v = dec.slope * raw + dec.inter;
             let l = check_label(name, v, [n % nx, n / nx, k])?;
             if l == 0 {
