@@ -68,7 +68,9 @@ pub fn surface_teeth(
     }
     let counts = vol.label_counts();
     let labels: Vec<u16> = counts.keys().copied().collect();
-    if !labels.is_empty() && super::numbering::looks_like_dentalsegmentator(&labels) {
+    // Under Universal numbering 1-5 are teeth; elsewhere they are DentalSegmentator's classes.
+    if scheme != VolumeScheme::Universal && super::numbering::looks_like_dentalsegmentator(&labels)
+    {
         return Err(Error::InvalidArgument(format!(
             "the volume's labels {labels:?} look like DentalSegmentator classes (3 upper teeth, \
              4 lower teeth), not one label per tooth: read it with the dentalsegmentator classes"
@@ -182,7 +184,11 @@ pub(crate) fn surface_box(
     grid.force_border_outside();
     let mut mesh = extract_closed(&mut grid);
     if mesh.face_count() == 0 {
-        return Err(Error::MissingData("no surface (empty label)".into()));
+        return Err(Error::MissingData(
+            "no surface: the label is too thin (about 2 voxels or less across) to survive the \
+             partial-volume smoothing"
+                .into(),
+        ));
     }
     for p in &mut mesh.positions {
         *p = vol.world(*p);
@@ -362,6 +368,23 @@ mod tests {
         v.labels[6] = 4;
         let e = surface_teeth(&v, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap_err();
         assert!(e.to_string().contains("DentalSegmentator"), "{e}");
+        // Under Universal numbering labels 3 and 4 are teeth (FDI 16 and 15), not jaw classes.
+        let mut w = LabelVolume::new([10, 10, 10], m, Frame::Lps, vec![0; 1000]).unwrap();
+        for k in 1..4 {
+            for j in 1..4 {
+                for i in 1..9 {
+                    let id = w.idx(i, j, k);
+                    w.labels[id] = if i < 5 { 3 } else { 4 };
+                }
+            }
+        }
+        let opts = SurfaceOptions {
+            min_volume_mm3: 0.0,
+            ..Default::default()
+        };
+        let u = surface_teeth(&w, VolumeScheme::Universal, &opts).unwrap();
+        assert_eq!(u.teeth.keys().copied().collect::<Vec<_>>(), vec![15, 16]);
+        assert!(surface_teeth(&w, VolumeScheme::Fdi, &opts).is_err());
         v.labels[6] = 99;
         let e = surface_teeth(&v, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap_err();
         assert!(e.to_string().contains("label 3 is not an FDI"), "{e}");
