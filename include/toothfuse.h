@@ -448,6 +448,16 @@ typedef struct toothfuse_tooth_report {
   bool converged;
 } toothfuse_tooth_report;
 
+/**
+ * Element type of a label buffer: one of the `TOOTHFUSE_LABEL_TYPE_*` values.
+ */
+typedef uint32_t toothfuse_label_type;
+
+/**
+ * Numbering of a label volume's values: one of the `TOOTHFUSE_VOLUME_SCHEME_*` values.
+ */
+typedef uint32_t toothfuse_volume_scheme;
+
 
 
 
@@ -537,6 +547,42 @@ typedef struct toothfuse_tooth_report {
  * One label per triangle.
  */
 #define TOOTHFUSE_LABEL_DOMAIN_FACE 1
+
+/**
+ * `uint8_t` labels.
+ */
+#define TOOTHFUSE_LABEL_TYPE_UINT8 0
+
+/**
+ * `uint16_t` labels (2-byte aligned).
+ */
+#define TOOTHFUSE_LABEL_TYPE_UINT16 1
+
+/**
+ * `int16_t` labels (2-byte aligned); negative values are refused.
+ */
+#define TOOTHFUSE_LABEL_TYPE_INT16 2
+
+/**
+ * `int32_t` labels (4-byte aligned); values outside 0-65535 are refused.
+ */
+#define TOOTHFUSE_LABEL_TYPE_INT32 3
+
+/**
+ * One label per tooth, the FDI number (STS 2024, most tooth segmentation models).
+ */
+#define TOOTHFUSE_VOLUME_SCHEME_FDI 0
+
+/**
+ * One label per tooth, Universal numbering 1-32.
+ */
+#define TOOTHFUSE_VOLUME_SCHEME_UNIVERSAL 1
+
+/**
+ * ToothFairy2: teeth at their FDI numbers; other structures (bones, canals, sinuses, pulps,
+ * implants) are skipped.
+ */
+#define TOOTHFUSE_VOLUME_SCHEME_TOOTHFAIRY2 2
 
 #ifdef __cplusplus
 extern "C" {
@@ -1214,6 +1260,43 @@ const char *toothfuse_version(void);
  * header/library mismatch. Thread-safe.
  */
 uint32_t toothfuse_abi_version(void);
+
+/**
+ * Adds the CBCT teeth of a label volume: every tooth label is surfaced (cavities filled,
+ * partial-volume smoothing, surface nets at the 0.5 level, largest component) to a closed,
+ * outward mesh in millimetres in the world frame of `voxel_to_world`, and added as the CBCT
+ * tooth of its FDI number (replacing one held). All or nothing: on any failure the session is
+ * unchanged. Labels under 20 mm^3 (fragments) and non-tooth labels of the scheme are skipped.
+ *
+ * - `dims`: 3 `size_t`, voxels along i, j, k; labels are stored i fastest, then j, then k.
+ * - `voxel_to_world`: 16 doubles, the row-major 4x4 matrix taking a voxel index (i, j, k, 1)
+ *   (voxel centres) to world millimetres (last row 0 0 0 1). The fused teeth come out in this
+ *   world frame (pass an LPS or a RAS matrix as the host expects). When NULL, `spacing` (3
+ *   doubles, mm, negative flips an axis) and `origin` (3 doubles, world position of voxel 0's
+ *   centre) give an axis-aligned grid; both must then be non-NULL.
+ * - `labels`: `label_count` (= dims[0]*dims[1]*dims[2]) values of `label_type`, aligned for it.
+ * - `scheme`: the numbering of the label values.
+ * - `teeth_added_out`: when not NULL, receives the number of teeth added (on success only).
+ *
+ * Fails with NULL_PARAMETER, INVALID_ARGUMENT (count mismatch, bad matrix, negative label, a
+ * label the scheme does not know, two labels for one tooth, a DentalSegmentator-style per-jaw
+ * volume), UNIT_MISMATCH (voxel size outside 0.001-10 mm) or MISSING_DATA (no tooth label);
+ * the message names the label or voxel.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; the pointers must be NULL or hold the documented
+ * number of readable (or, for `teeth_added_out`, writable) values.
+ */
+toothfuse_status toothfuse_session_add_label_volume(struct toothfuse_session *session,
+                                                    const size_t *dims,
+                                                    const double *voxel_to_world,
+                                                    const double *spacing,
+                                                    const double *origin,
+                                                    const void *labels,
+                                                    size_t label_count,
+                                                    toothfuse_label_type label_type,
+                                                    toothfuse_volume_scheme scheme,
+                                                    size_t *teeth_added_out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -26,6 +26,7 @@ pub mod register;
 pub mod session;
 pub mod stitch;
 pub mod units;
+pub mod volume;
 
 #[allow(unsafe_code)]
 pub mod ffi;

@@ -37,6 +37,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 
 mod results;
+mod volume;
 
 pub use results::{Fused, Notes};
 

@@ -34,6 +34,39 @@ class BindingsTest(unittest.TestCase):
             s.remove_tooth(toothfuse.CBCT, 15)
             self.assertEqual(s.teeth(toothfuse.CBCT), [16])
 
+    def test_label_volume(self):
+        # A ball of radius 3 mm labelled 36 on a 0.25 mm grid with LPS-style negative x, y steps.
+        n, h, r = 32, 0.25, 3.0
+        labels = array.array("H", [0]) * (n * n * n)
+        for k in range(n):
+            for j in range(n):
+                for i in range(n):
+                    x, y, z = (i - 15.5) * h, (j - 15.5) * h, (k - 15.5) * h
+                    if x * x + y * y + z * z < r * r:
+                        labels[i + n * (j + n * k)] = 36
+        m = [-h, 0, 0, 10 + 15.5 * h, 0, -h, 0, 20 + 15.5 * h, 0, 0, h, 30 - 15.5 * h,
+             0, 0, 0, 1]
+        with toothfuse.Session() as s:
+            self.assertEqual(s.add_label_volume(labels, (n, n, n), voxel_to_world=m), 1)
+            self.assertEqual(s.teeth(toothfuse.CBCT), [36])
+            info = s.info(toothfuse.CBCT, 36)
+            self.assertTrue(info["closed"] and info["manifold"])
+            exact = 4.0 / 3.0 * math.pi * r ** 3
+            self.assertLess(abs(info["signed_volume"] - exact) / exact, 0.03)
+            pos, _ = s.mesh(toothfuse.CBCT, 36)
+            for q in range(0, len(pos), 3):
+                d = math.dist(pos[q:q + 3], (10, 20, 30))
+                self.assertLess(abs(d - r), 0.1)
+            # Negative labels (an intensity image) are refused, the session unchanged.
+            bad = array.array("h", [-5]) * (n * n * n)
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_label_volume(bad, (n, n, n), spacing=(h, h, h), origin=(0, 0, 0))
+            self.assertIn("outside 0-65535", str(e.exception))
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_label_volume(labels, (n, n, n - 1), voxel_to_world=m)
+            self.assertIn("does not match dims", str(e.exception))
+            self.assertEqual(s.teeth(toothfuse.CBCT), [36])
+
     def test_jaw_and_errors(self):
         with toothfuse.Session() as s:
             # Per-face labels: the cube's first 6 faces are crown 11 (open), the rest gingiva.

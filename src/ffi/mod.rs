@@ -23,6 +23,7 @@ pub mod session;
 pub mod stages;
 pub mod status;
 pub mod version;
+pub mod volume;
 
 pub use file::*;
 pub use fuse::*;
@@ -32,3 +33,4 @@ pub use session::*;
 pub use stages::*;
 pub use status::*;
 pub use version::*;
+pub use volume::*;

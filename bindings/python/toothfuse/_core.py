@@ -141,6 +141,9 @@ _buf = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32, _u32
 _add_tooth = _fn("toothfuse_session_add_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32, *_buf)
 _add_jaw = _fn("toothfuse_session_add_jaw", _st, _S, ctypes.c_uint32, *_buf, _i32_p,
                ctypes.c_size_t, ctypes.c_uint32)
+_d_p = ctypes.POINTER(ctypes.c_double)
+_add_volume = _fn("toothfuse_session_add_label_volume", _st, _S, _size_p, _d_p, _d_p, _d_p,
+                  ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint32, _size_p)
 _set_repair = _fn("toothfuse_session_set_ios_repair", _st, _S, ctypes.c_bool, ctypes.c_double)
 _remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
 _count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
@@ -314,6 +317,58 @@ class Session:
         self._check(_add_jaw(self._h, modality, vp, n, stride, scalar, tp, len(t), lp, len(lab),
                              _FACE if per_face else _VERTEX))
         return self.teeth(modality)
+
+    def add_label_volume(self, labels, dims=None, voxel_to_world=None, spacing=None,
+                         origin=None, scheme="fdi"):
+        """Adds the CBCT teeth of a label volume (one label per tooth), each surfaced to a closed
+        mesh in the world frame of voxel_to_world (16 floats, row-major 4x4, voxel index ->
+        mm; e.g. nibabel's img.affine for RAS, or an LPS matrix) or of spacing + origin (axis-
+        aligned). labels: a 3-D numpy array indexed [i, j, k] (nibabel's order), or a flat
+        array('B'/'H'/'h'/'i') / list with i fastest plus dims. scheme: "fdi", "universal" or
+        "toothfairy2". All or nothing. Returns the number of teeth added."""
+        schemes = {"fdi": 0, "universal": 1, "toothfairy2": 2}
+        if scheme not in schemes:
+            raise ValueError(f"scheme {scheme!r} is not one of {sorted(schemes)}")
+        if _is_ndarray(labels):
+            np = _numpy()
+            if labels.ndim != 3:
+                raise ValueError(f"labels must be a 3-D array, got shape {labels.shape}")
+            dims = labels.shape
+            codes = {np.dtype(np.uint8): (0, "B"), np.dtype(np.uint16): (1, "H"),
+                     np.dtype(np.int16): (2, "h"), np.dtype(np.int32): (3, "i")}
+            if labels.dtype not in codes:
+                if labels.size and (labels.min() < 0 or labels.max() > 65535):
+                    raise ValueError("labels must be 0-65535")
+                labels = labels.astype(np.int32)
+            ltype, _ = codes[labels.dtype]
+            flat = np.ascontiguousarray(labels.ravel(order="F"))
+            ptr, count = flat.ctypes.data_as(ctypes.c_void_p), flat.size
+            keep = flat
+        else:
+            if dims is None:
+                raise ValueError("dims (nx, ny, nz) is needed with flat labels")
+            tc = labels.typecode if isinstance(labels, array.array) else None
+            types = {"B": 0, "H": 1, "h": 2, "i": 3}
+            arr = labels if tc in types else array.array("i", _flat(labels))
+            ltype = types[arr.typecode]
+            count = len(arr)
+            ptr = ctypes.c_void_p(arr.buffer_info()[0]) if count else None
+            keep = arr
+        d = (ctypes.c_size_t * 3)(*[int(x) for x in dims])
+        m = sp = org = None
+        if voxel_to_world is not None:
+            m = (ctypes.c_double * 16)(*[float(x) for x in _flat(voxel_to_world)])
+        else:
+            if spacing is None or origin is None:
+                raise ValueError("give voxel_to_world, or spacing and origin")
+            sp = (ctypes.c_double * 3)(*[float(x) for x in spacing])
+            org = (ctypes.c_double * 3)(*[float(x) for x in origin])
+        added = ctypes.c_size_t()
+        cast = lambda a: ctypes.cast(a, _d_p) if a is not None else None
+        self._check(_add_volume(self._h, ctypes.cast(d, _size_p), cast(m), cast(sp), cast(org),
+                                ptr, count, ltype, schemes[scheme], ctypes.byref(added)))
+        del keep
+        return added.value
 
     def set_ios_repair(self, enabled, max_hole_fraction=0.5):
         """Repair IOS crowns on entry (real scans need it); off by default."""

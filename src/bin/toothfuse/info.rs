@@ -6,11 +6,13 @@ use std::path::PathBuf;
 use toothfuse::TriMesh;
 use toothfuse::io::{Detected, LabelScheme, TeethOptions, detect_scheme};
 use toothfuse::mesh::{SubMesh, split_by_face_labels, split_by_vertex_labels};
+use toothfuse::volume::{Frame, VolumeScheme};
 
 /// `toothfuse info` arguments.
 #[derive(Args, Debug)]
 pub struct InfoArgs {
-    /// A mesh file (.ply, .stl, .obj, .vtp, .vtk) or a folder of tooth_<n> files.
+    /// A mesh file (.ply, .stl, .obj, .vtp, .vtk), a folder of tooth_<n> files, or a label
+    /// volume (.nii, .nii.gz, .nrrd, .seg.nrrd).
     file: PathBuf,
     /// Name of the label array (point or cell data; PLY vertex or face property). Default:
     /// the first known name (Label, labels, UniversalID, PredictedID, FDI, ...).
@@ -19,6 +21,9 @@ pub struct InfoArgs {
     /// Tooth numbering of the labels; auto detects it where unambiguous.
     #[arg(long, default_value = "auto", value_parser = ["auto", "fdi", "universal", "meshlabeler"])]
     labels: String,
+    /// World frame to print a label volume's voxel-to-world matrix in.
+    #[arg(long, default_value = "lps", value_parser = ["lps", "ras"])]
+    frame: String,
 }
 
 /// `label→FDI` pairs of the non-gingiva labels, or why they do not map.
@@ -35,6 +40,78 @@ fn fdi_map(d: &Detected, labels: impl Iterator<Item = i32>) -> String {
         }
     }
     out.join(" ")
+}
+
+/// Facts about a label volume: format, grid, orientation, labels.
+fn volume_info(a: &InfoArgs) -> Result<()> {
+    let frame = Frame::from_name(&a.frame).unwrap_or_default();
+    let vf = toothfuse::io::read_label_volume(&a.file, frame)
+        .with_context(|| format!("reading {}", a.file.display()))?;
+    let (h, v) = (&vf.header, &vf.volume);
+    let s = v.spacing();
+    println!(
+        "{}: {} label volume, {}x{}x{} {}, voxel {:.4} x {:.4} x {:.4} mm",
+        a.file.display(),
+        h.format,
+        h.full_dims[0],
+        h.full_dims[1],
+        h.full_dims[2],
+        h.element,
+        s[0],
+        s[1],
+        s[2]
+    );
+    println!(
+        "orientation: voxel axes {} (from the {}), {}; world frame {}",
+        v.axis_codes(),
+        h.orientation_source,
+        if v.is_oblique() {
+            "oblique"
+        } else {
+            "axis-aligned"
+        },
+        frame.name()
+    );
+    let m = h.full_voxel_to_world;
+    for r in 0..3 {
+        let row = m.row(r);
+        println!(
+            "  [{:10.4} {:10.4} {:10.4} {:10.4}]",
+            row.x, row.y, row.z, row.w
+        );
+    }
+    let voxel = s[0] * s[1] * s[2];
+    let boxes = v.label_boxes();
+    let counts = v.label_counts();
+    let seg: std::collections::BTreeMap<u16, &str> =
+        h.segments.iter().map(|(l, n)| (*l, n.as_str())).collect();
+    println!("labels: {}", counts.len());
+    for (l, c) in &counts {
+        let (lo, hi) = boxes[l];
+        let ext: Vec<String> = (0..3)
+            .map(|k| format!("{:.1}", (hi[k] - lo[k] + 1) as f64 * s[k]))
+            .collect();
+        let fdi = VolumeScheme::Fdi
+            .tooth_fdi(*l)
+            .ok()
+            .flatten()
+            .map(|f| format!(", FDI {f}"))
+            .unwrap_or_default();
+        let name = seg.get(l).map(|n| format!(" \"{n}\"")).unwrap_or_default();
+        println!(
+            "  label {l}{name}: {c} voxels, {:.1} mm^3, extent {} mm{fdi}",
+            *c as f64 * voxel,
+            ext.join(" x ")
+        );
+    }
+    let keys: Vec<u16> = counts.keys().copied().collect();
+    if toothfuse::volume::numbering::looks_like_dentalsegmentator(&keys) {
+        println!(
+            "these look like DentalSegmentator classes: 1 maxilla, 2 mandible, 3 upper teeth, 4 \
+             lower teeth, 5 mandibular canal (no tooth numbers)"
+        );
+    }
+    Ok(())
 }
 
 fn describe(name: &str, m: &TriMesh) -> String {
@@ -63,6 +140,9 @@ fn describe(name: &str, m: &TriMesh) -> String {
 
 /// Runs `toothfuse info`.
 pub fn run(a: &InfoArgs) -> Result<()> {
+    if toothfuse::io::is_volume_path(&a.file) {
+        return volume_info(a);
+    }
     let given = LabelScheme::from_name(&a.labels);
     if a.file.is_dir() {
         let opts = TeethOptions {

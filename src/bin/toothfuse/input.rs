@@ -9,6 +9,7 @@ use toothfuse::io::{LabelScheme, TeethOptions, detect_scheme, labels_to_fdi};
 use toothfuse::mesh::LabeledMesh;
 use toothfuse::pipeline::PipelineOptions;
 use toothfuse::register::{OutputFrame, Preset};
+use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
 
 /// Inputs and options shared by `register` and `fuse`.
 #[derive(Args, Clone, Debug)]
@@ -17,9 +18,18 @@ pub struct InputArgs {
     /// of tooth_<n> crown files. Without --ios/--cbct: the built-in synthetic jaw.
     #[arg(long, requires = "cbct")]
     pub ios: Option<PathBuf>,
-    /// CBCT teeth: a labeled mesh or a folder of tooth_<n>.stl/.ply/... files.
+    /// CBCT teeth: a labeled mesh, a folder of tooth_<n>.stl/.ply/... files, or a label volume
+    /// (.nii, .nii.gz, .nrrd, .seg.nrrd) with one label per tooth, surfaced here.
     #[arg(long, requires = "ios")]
     pub cbct: Option<PathBuf>,
+    /// Numbering of a CBCT label volume's values: fdi (STS 2024 and most tooth models),
+    /// universal (1-32) or toothfairy2 (teeth at FDI numbers, other structures skipped).
+    #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "toothfairy2"])]
+    pub cbct_classes: String,
+    /// World frame the CBCT label volume is expressed in (and so the fused teeth, with
+    /// --frame cbct): lps (DICOM, ITK, 3D Slicer files) or ras (NIfTI, Slicer's scene).
+    #[arg(long, default_value = "lps", value_parser = ["lps", "ras"])]
+    pub cbct_frame: String,
     /// Tooth numbering of the input labels and file names; auto detects it from the array
     /// name (UniversalID, PredictedID: universal) or the values where unambiguous.
     #[arg(long, default_value = "auto", value_parser = ["auto", "fdi", "universal", "meshlabeler"])]
@@ -66,6 +76,10 @@ impl InputArgs {
             return Ok(None);
         };
         let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
+        eprintln!("{ios_note}");
+        if toothfuse::io::is_volume_path(cbct) {
+            return Ok(Some((ios, self.read_volume_teeth(cbct)?)));
+        }
         let opts = TeethOptions {
             scheme: self.scheme(),
             label_array: self.cbct_label_array.clone(),
@@ -73,7 +87,6 @@ impl InputArgs {
         let t = toothfuse::io::read_teeth_opts(cbct, &opts)
             .with_context(|| format!("reading CBCT {}", cbct.display()))?;
         // How the labels were read, said once both inputs are read (errors stay one line).
-        eprintln!("{ios_note}");
         eprintln!(
             "CBCT {}: {}numbering {} ({})",
             cbct.display(),
@@ -84,6 +97,31 @@ impl InputArgs {
             t.scheme.reason
         );
         Ok(Some((ios, t.teeth)))
+    }
+
+    /// The teeth of a CBCT label volume, surfaced in the --cbct-frame world; skipped labels
+    /// (fragments, non-tooth structures) are named on stderr.
+    fn read_volume_teeth(&self, path: &Path) -> Result<BTreeMap<u8, TriMesh>> {
+        let frame = Frame::from_name(&self.cbct_frame).unwrap_or_default();
+        let scheme = VolumeScheme::from_name(&self.cbct_classes).unwrap_or_default();
+        let vf = toothfuse::io::read_label_volume(path, frame)
+            .with_context(|| format!("reading CBCT volume {}", path.display()))?;
+        let t = surface_teeth(&vf.volume, scheme, &SurfaceOptions::default())
+            .with_context(|| format!("surfacing the teeth of {}", path.display()))?;
+        for (label, why) in &t.skipped {
+            eprintln!("note: {}: label {label} skipped: {why}", path.display());
+        }
+        for (fdi, tooth) in &t.teeth {
+            if tooth.touches_border {
+                eprintln!(
+                    "note: {}: tooth {fdi} (label {}) reaches the edge of the volume: it may be cut \
+                     by the field of view",
+                    path.display(),
+                    tooth.label
+                );
+            }
+        }
+        Ok(t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect())
     }
 }
 

@@ -1,0 +1,178 @@
+//! The `toothfuse` binary with CBCT label volumes: `info` on a NIfTI built here (and its error on
+//! a volume without orientation), and `fuse --cbct mask.nii.gz` on a real-anatomy phantom made from
+//! the STS 2024 mask (../shared/data/real; skipped with a message when absent), checked against
+//! the truth through report.json.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+use toothfuse::arch::Jaw;
+use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
+use toothfuse::{Rigid, TriMesh};
+
+fn tf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_toothfuse"))
+        .args(args)
+        .output()
+        .expect("run toothfuse")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("toothfuse_cli_vol_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A 4×3×2 uint16 NIfTI-1: voxel (2, 1, 1) = 36, sform diag(-0.25, -0.25, 0.5) (or no
+/// orientation at all).
+fn tiny_nifti(oriented: bool) -> Vec<u8> {
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    for (d, v) in [3i16, 4, 3, 2, 1, 1, 1, 1].iter().enumerate() {
+        h[40 + 2 * d..42 + 2 * d].copy_from_slice(&v.to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&512i16.to_le_bytes());
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    h[123] = 2;
+    if oriented {
+        h[254..256].copy_from_slice(&1i16.to_le_bytes());
+        let rows = [
+            [-0.25f32, 0.0, 0.0, 10.0],
+            [0.0, -0.25, 0.0, 20.0],
+            [0.0, 0.0, 0.5, -5.0],
+        ];
+        for (r, row) in rows.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                let at = 280 + 16 * r + 4 * c;
+                h[at..at + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    h[344..348].copy_from_slice(b"n+1\0");
+    let mut labels = [0u16; 24];
+    labels[2 + 4 * (1 + 3)] = 36;
+    h.extend(labels.iter().flat_map(|v| v.to_le_bytes()));
+    h
+}
+
+#[test]
+fn info_lists_grid_orientation_and_labels() {
+    let d = tmp("info");
+    let p = d.join("tiny.nii");
+    std::fs::write(&p, tiny_nifti(true)).unwrap();
+    let o = tf(&["info", p.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}");
+    assert!(
+        out.contains("NIfTI-1 label volume, 4x3x2 uint16, voxel 0.2500 x 0.2500 x 0.5000 mm"),
+        "{out}"
+    );
+    assert!(
+        out.contains("voxel axes LPS (from the sform), axis-aligned; world frame LPS"),
+        "{out}"
+    );
+    assert!(out.contains("label 36: 1 voxels"), "{out}");
+    // In RAS the first row of the matrix is (-0.25, 0, 0, 10); in LPS (0.25, 0, 0, -10).
+    let ras = String::from_utf8_lossy(&tf(&["info", p.to_str().unwrap(), "--frame", "ras"]).stdout)
+        .to_string();
+    assert!(
+        ras.contains("[   -0.2500     0.0000     0.0000    10.0000]"),
+        "{ras}"
+    );
+    assert!(
+        out.contains("[    0.2500     0.0000     0.0000   -10.0000]"),
+        "{out}"
+    );
+    let q = d.join("noorient.nii");
+    std::fs::write(&q, tiny_nifti(false)).unwrap();
+    let o = tf(&["info", q.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("noorient.nii") && err.contains("no orientation"),
+        "{err}"
+    );
+}
+
+#[test]
+fn fuse_from_the_sts_mask_file() {
+    let Some(dir) = toothfuse::io::real_data_dir() else {
+        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
+        return;
+    };
+    let mask = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
+    if !mask.exists() {
+        eprintln!("SKIPPED: {} not found", mask.display());
+        return;
+    }
+    // Truth: the mask's lower teeth in its LPS world, which is also the CBCT frame of the file.
+    let vol = toothfuse::io::read_label_volume(&mask, Frame::Lps)
+        .unwrap()
+        .volume;
+    let lower = vol.relabeled(|l| if (31..=48).contains(&l) { l } else { 0 });
+    let teeth = surface_teeth(&lower, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap();
+    let anatomy: BTreeMap<u8, TriMesh> = teeth
+        .teeth
+        .iter()
+        .map(|(f, t)| (*f, t.mesh.clone()))
+        .collect();
+    let p = Phantom::generate(&PhantomOptions {
+        seed: 3,
+        jaw: Jaw::Lower,
+        variant: Variant::Full,
+        anatomy: Some(anatomy),
+        ..Default::default()
+    })
+    .unwrap();
+    let d = tmp("fuse");
+    let ios = d.join("ios.ply");
+    let labels = p.ios.vertex_labels.clone().unwrap();
+    toothfuse::io::write_mesh(&ios, &p.ios.mesh, &[("label", &labels)]).unwrap();
+    let out = d.join("out");
+    let o = tf(&[
+        "fuse",
+        "--ios",
+        ios.to_str().unwrap(),
+        "--cbct",
+        mask.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    // The fragments are named on stderr.
+    assert!(
+        err.contains("label 11 skipped") && err.contains("label 14 skipped"),
+        "{err}"
+    );
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let fused = rep["teeth"].as_array().unwrap();
+    let fdis: Vec<u64> = fused.iter().map(|t| t["fdi"].as_u64().unwrap()).collect();
+    assert_eq!(fdis, vec![31, 32, 33, 35, 36, 37, 41, 42, 43, 44]);
+    let mut tre = Vec::new();
+    for t in fused {
+        assert!(t["watertight"].as_bool().unwrap(), "{t}");
+        let fdi = t["fdi"].as_u64().unwrap() as u8;
+        let m: Vec<f64> = t["ios_to_output"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let ios_to_cbct = Rigid::from_row_major(&m.try_into().unwrap());
+        // The CBCT frame of the file is the phantom's world; the truth's CBCT->IOS mapping is
+        // from the phantom's own CBCT frame, so the estimate is expressed from there.
+        let w2c = p.truth.world_to_cbct;
+        let est = ios_to_cbct.inverse().compose(&w2c.inverse());
+        tre.push(p.truth.teeth[&fdi].tre(&w2c, &est));
+    }
+    let mean = tre.iter().sum::<f64>() / tre.len() as f64;
+    eprintln!(
+        "CLI fuse from the STS mask file: mean TRE {mean:.3} mm over {} teeth",
+        tre.len()
+    );
+    assert!(mean < 0.1, "mean TRE {mean} ({tre:?})");
+}
