@@ -5,7 +5,9 @@
 # libopenmesh-dev, libgtest-dev, and cbindgen 0.29.0 (cargo), plus rustfmt/clippy (rustup).
 # Then: cargo fmt --check, cargo clippy -D warnings, cargo test --release, the header check,
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
-# tests against the installed package), an outside find_package consumer and a pkg-config build.
+# tests against the installed package), an outside find_package consumer and a pkg-config build,
+# then scripts/check_sanitizers.sh (C/C++ tests under ASan+UBSan, valgrind memcheck, Miri over
+# the C-ABI unit tests) and scripts/check_fuzz.sh (every cargo-fuzz target for 30 s, nightly only).
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -110,5 +112,12 @@ cc -std=c11 $(pkg-config --cflags toothfuse) cpp_tests/consumer/main.c \
   -o "$BUILD/pkgconfig_consumer_static" "$PREFIX/lib/libtoothfuse.a" \
   $(pkg-config --libs-only-l --static toothfuse | sed 's/-ltoothfuse//')
 "$BUILD/pkgconfig_consumer_static"
+
+# ---------------------------------------------------------------------------------------------
+section "sanitizers: ASan+UBSan C/C++ tests, valgrind memcheck, Miri (scripts/check_sanitizers.sh)"
+bash scripts/check_sanitizers.sh "$PREFIX" "$BUILD/cpp_tests"
+
+section "fuzzing: each cargo-fuzz target ${FUZZ_SECONDS:-30} s (scripts/check_fuzz.sh)"
+bash scripts/check_fuzz.sh
 
 section "all tests passed in $(($(date +%s) - START)) s"

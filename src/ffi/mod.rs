@@ -30,3 +30,6 @@ pub use session::*;
 pub use stages::*;
 pub use status::*;
 pub use version::*;
+
+#[cfg(test)]
+mod abi_tests;

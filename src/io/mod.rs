@@ -15,6 +15,7 @@ mod vtp;
 mod vtp_data;
 mod vtp_write;
 
+pub use obj::read_obj_labeled_bytes;
 pub use ply::{read_ply_bytes, write_ply};
 pub use stl::{read_stl_bytes, write_stl};
 pub use teeth::{

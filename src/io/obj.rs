@@ -15,19 +15,33 @@ use std::path::Path;
 
 /// Reads an OBJ, plus per-vertex labels from `<stem>.json` beside it when that file exists.
 pub(super) fn read_obj_with_labels(path: &Path, bytes: &[u8]) -> Result<LabeledMesh> {
-    let name = path.display().to_string();
-    let mesh = read_obj_bytes(&name, bytes)?;
     let json = path.with_extension("json");
-    let vertex_labels = if json.is_file() {
+    let labels = if json.is_file() {
         let text =
             std::fs::read(&json).map_err(|e| file_err(&json, format!("cannot read: {e}")))?;
-        Some(parse_teeth3ds_labels(
-            &json.display().to_string(),
-            &text,
-            mesh.vertex_count(),
-        )?)
+        Some((json.display().to_string(), text))
     } else {
         None
+    };
+    read_obj_labeled_bytes(
+        &path.display().to_string(),
+        bytes,
+        labels.as_ref().map(|(n, t)| (n.as_str(), t.as_slice())),
+    )
+}
+
+/// Reads an OBJ held in memory (`file` names it in error messages) and, when `labels` is
+/// given as `(name, bytes)`, its Teeth3DS label JSON (`{"jaw": "upper"|"lower", "labels": [one
+/// FDI number per vertex, 0 = gingiva]}`) as per-vertex labels.
+pub fn read_obj_labeled_bytes(
+    file: &str,
+    bytes: &[u8],
+    labels: Option<(&str, &[u8])>,
+) -> Result<LabeledMesh> {
+    let mesh = read_obj_bytes(file, bytes)?;
+    let vertex_labels = match labels {
+        Some((name, text)) => Some(parse_teeth3ds_labels(name, text, mesh.vertex_count())?),
+        None => None,
     };
     Ok(LabeledMesh {
         mesh,

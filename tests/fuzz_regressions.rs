@@ -1,0 +1,109 @@
+//! The fuzz corpus as plain tests: every seed of `fuzz/seeds/<reader>/` reads as a valid mesh,
+//! and every input a fuzz target once crashed on (`tests/fuzz_regressions/<reader>/`, kept after
+//! the fix) is refused with an error naming the file, without panicking or allocating what a
+//! header merely declares. The targets themselves run in scripts/check_fuzz.sh.
+
+use std::path::{Path, PathBuf};
+use toothfuse::io;
+use toothfuse::mesh::LabeledMesh;
+
+const READERS: [&str; 5] = [
+    "read_ply",
+    "read_stl",
+    "read_obj_labels",
+    "read_vtp",
+    "read_vtk_legacy",
+];
+
+/// Reads `data` the way fuzz target `target` does (OBJ: label JSON after a NUL byte).
+fn read(target: &str, data: &[u8]) -> toothfuse::Result<LabeledMesh> {
+    match target {
+        "read_ply" => io::read_ply_bytes("input", data),
+        "read_stl" => io::read_stl_bytes("input", data).map(|mesh| LabeledMesh {
+            mesh,
+            ..Default::default()
+        }),
+        "read_obj_labels" => match data.iter().position(|&b| b == 0) {
+            Some(i) => {
+                io::read_obj_labeled_bytes("input", &data[..i], Some(("labels", &data[i + 1..])))
+            }
+            None => io::read_obj_labeled_bytes("input", data, None),
+        },
+        "read_vtp" => io::read_vtp_bytes("input", data),
+        "read_vtk_legacy" => io::read_vtk_legacy_bytes("input", data),
+        _ => unreachable!("unknown target {target}"),
+    }
+}
+
+/// The files of a folder, sorted (none when it does not exist).
+fn files(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    v.retain(|p| p.is_file());
+    v.sort();
+    v
+}
+
+/// What every successful read promises (as the fuzz targets assert).
+fn check_mesh(what: &str, m: &LabeledMesh) {
+    let n = m.mesh.positions.len();
+    assert!(n > 0 && !m.mesh.triangles.is_empty(), "{what}: empty mesh");
+    assert!(m.mesh.positions.iter().all(|p| p.is_finite()), "{what}");
+    assert!(
+        m.mesh.triangles.iter().flatten().all(|&v| (v as usize) < n),
+        "{what}: index out of range"
+    );
+    if let Some(l) = &m.vertex_labels {
+        assert_eq!(l.len(), n, "{what}: vertex labels");
+    }
+    if let Some(l) = &m.face_labels {
+        assert_eq!(l.len(), m.mesh.triangles.len(), "{what}: face labels");
+    }
+}
+
+#[test]
+fn every_seed_reads_as_a_valid_mesh() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for target in READERS {
+        let seeds = files(&root.join("fuzz/seeds").join(target));
+        assert!(seeds.len() >= 2, "{target}: seed corpus missing");
+        for f in seeds {
+            let what = format!("{target} seed {}", f.display());
+            let m =
+                read(target, &std::fs::read(&f).unwrap()).unwrap_or_else(|e| panic!("{what}: {e}"));
+            check_mesh(&what, &m);
+            // Every seed is the same labeled square pyramid: 5 vertices, 6 triangles.
+            assert_eq!(
+                (m.mesh.positions.len(), m.mesh.triangles.len()),
+                (5, 6),
+                "{what}"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_fuzz_crash_input_is_refused_cleanly() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    let mut n = 0;
+    for target in READERS {
+        for f in files(&root.join(target)) {
+            let data = std::fs::read(&f).unwrap();
+            match read(target, &data) {
+                Err(e) => {
+                    let msg = e.to_string();
+                    assert!(msg.starts_with("input"), "{}: {msg}", f.display());
+                    println!("{target} {}: {msg}", f.display());
+                }
+                Ok(m) => panic!(
+                    "{}: read as {} vertices, expected an error",
+                    f.display(),
+                    m.mesh.positions.len()
+                ),
+            }
+            n += 1;
+        }
+    }
+    println!("{n} regression inputs refused");
+}
