@@ -32,7 +32,7 @@ fi
 
 START=$(date +%s)
 echo "building ${#TARGETS[@]} fuzz targets (cargo +nightly fuzz build)"
-cargo +nightly fuzz build
+cargo +nightly fuzz build --codegen-units 16
 echo "built in $(($(date +%s) - START)) s; fuzzing each target ${SECONDS_PER_TARGET} s, ${PARALLEL} at a time"
 
 BIN="$ROOT/fuzz/target/x86_64-unknown-linux-gnu/release"

@@ -3,9 +3,41 @@
 //! the fix) is refused with an error naming the file, without panicking or allocating what a
 //! header merely declares. The targets themselves run in scripts/check_fuzz.sh.
 
+use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use toothfuse::io;
 use toothfuse::mesh::LabeledMesh;
+
+/// The system allocator, recording the largest single request: a reader must size its buffers by
+/// the bytes it was given, never by a count a header merely declares.
+struct LargestAlloc;
+
+static LARGEST: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged.
+unsafe impl GlobalAlloc for LargestAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
+        // SAFETY: the caller's contract, forwarded.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: the caller's contract, forwarded.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        LARGEST.fetch_max(new_size, Ordering::Relaxed);
+        // SAFETY: the caller's contract, forwarded.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: LargestAlloc = LargestAlloc;
+
+/// Largest single allocation allowed while reading inputs of a few KB.
+const ALLOC_LIMIT: usize = 64 << 20;
 
 const READERS: [&str; 5] = [
     "read_ply",
@@ -90,7 +122,15 @@ fn every_fuzz_crash_input_is_refused_cleanly() {
     for target in READERS {
         for f in files(&root.join(target)) {
             let data = std::fs::read(&f).unwrap();
-            match read(target, &data) {
+            let result = read(target, &data);
+            let largest = LARGEST.load(Ordering::Relaxed);
+            assert!(
+                largest <= ALLOC_LIMIT,
+                "{}: an allocation of {largest} bytes for a {}-byte input",
+                f.display(),
+                data.len()
+            );
+            match result {
                 Err(e) => {
                     let msg = e.to_string();
                     assert!(msg.starts_with("input"), "{}: {msg}", f.display());
@@ -105,5 +145,6 @@ fn every_fuzz_crash_input_is_refused_cleanly() {
             n += 1;
         }
     }
+    assert!(n >= 2, "regression inputs missing");
     println!("{n} regression inputs refused");
 }

@@ -104,7 +104,7 @@ impl Jaw {
             cbct: Vec::new(),
         };
         for (k, &fdi) in TEETH.iter().enumerate() {
-            let (p, t) = uv_tooth(20, 16, |p| {
+            let (p, t) = uv_tooth(12, 10, |p| {
                 p[2] > 0.3 + 0.9 * (2.0 * p[1].atan2(p[0])).cos()
             });
             let base = (jaw.ios_vertices.len() / 3) as u32;
@@ -113,7 +113,7 @@ impl Jaw {
             jaw.ios_labels.extend(std::iter::repeat_n(fdi, p.len()));
             jaw.ios_indices
                 .extend(t.iter().flatten().map(|&v| v + base));
-            let (p, t) = uv_tooth(12, 12, |_| true);
+            let (p, t) = uv_tooth(8, 8, |_| true);
             let v = p.iter().flat_map(|&q| place(q, k, false)).collect();
             jaw.cbct.push((fdi, v, t.into_iter().flatten().collect()));
         }
