@@ -7,7 +7,7 @@
 # scratch copy of its seed corpus (fuzz/seeds/<target>; the repository is not changed) with:
 #   -rss_limit_mb / -malloc_limit_mb 1024: a size declared in a header (PLY element counts, the STL
 #     triangle count, VTK NumberOfPoints, ...) must be refused, not allocated;
-#   -timeout 10 s per input: no hang;
+#   -timeout 10 s per input (60 s for ffi_fuse, a whole registration + fuse): no hang;
 #   -max_len: 16 KiB for file readers, 256 B (32 mutation records) for ffi_fuse.
 # A crash, leak, OOM or timeout fails the run; the input is left in build/fuzz/artifacts/<target>/
 # (reproduce with `fuzz/target/x86_64-unknown-linux-gnu/release/<target> <file>`). Keep each
@@ -40,11 +40,12 @@ rm -rf "$WORK"
 mkdir -p "$WORK"
 run_target() {
   local t=$1 max_len=16384
-  [ "$t" = ffi_fuse ] && max_len=256
+  local timeout=10
+  [ "$t" = ffi_fuse ] && max_len=256 && timeout=60
   mkdir -p "$WORK/corpus/$t" "$WORK/artifacts/$t"
   cp fuzz/seeds/"$t"/* "$WORK/corpus/$t/"
   if "$BIN/$t" "$WORK/corpus/$t" -max_total_time="$SECONDS_PER_TARGET" -rss_limit_mb=1024 \
-      -malloc_limit_mb=1024 -timeout=10 -max_len="$max_len" -print_final_stats=1 \
+      -malloc_limit_mb=1024 -timeout="$timeout" -max_len="$max_len" -print_final_stats=1 \
       -artifact_prefix="$WORK/artifacts/$t/" >"$WORK/$t.log" 2>&1; then
     echo "fuzz $t: ok ($(grep -o 'stat::number_of_executed_units: *[0-9]*' "$WORK/$t.log" |
       grep -o '[0-9]*$') runs, corpus $(ls "$WORK/corpus/$t" | wc -l) inputs)"

@@ -52,7 +52,9 @@ fn copy_fused(s: *mut toothfuse_session) {
     {
         return;
     }
-    for &fdi in fdis[..n].iter().chain([0].iter()) {
+    // Each fused tooth, then the whole fused jaw (fdi 0) when any tooth was fused.
+    let whole: &[i32] = if n > 0 { &[0] } else { &[] };
+    for &fdi in fdis[..n].iter().chain(whole) {
         let (mut nv, mut ni) = (0usize, 0usize);
         // SAFETY: live session, valid out pointers.
         let st = unsafe { toothfuse_session_fused_size(s, fdi, &mut nv, &mut ni) };

@@ -138,7 +138,7 @@ pub struct Call {
     pub face_labels: bool,
     /// Switch on IOS repair before adding.
     pub repair: bool,
-    /// Options preset and frame (passed through unchecked, so bad enums are exercised too).
+    /// Options preset (passed through unchecked, so bad enums are exercised too).
     pub preset: u32,
     /// Output frame.
     pub frame: u32,
@@ -149,10 +149,9 @@ pub struct Call {
 /// Applies the mutations encoded in `data` (8-byte records: op, target, value) to the jaw and
 /// returns how to call the ABI. Every record is interpreted; nothing is out of range for it.
 pub fn mutate(jaw: &mut Jaw, data: &[u8]) -> Call {
-    let mut call = Call {
-        preset: 1,
-        ..Call::default()
-    };
+    // The paper preset unless a record asks otherwise: its registration is the cheaper one per
+    // execution under the fuzzer's instrumentation (~1 s against ~3 s for the default preset).
+    let mut call = Call::default();
     for r in data.chunks_exact(8) {
         let target = u16::from_le_bytes([r[1], r[2]]) as usize;
         let raw = [r[3], r[4], r[5], r[6]];
