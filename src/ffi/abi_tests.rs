@@ -17,10 +17,8 @@ impl S {
     fn new() -> S {
         let mut p = ptr::null_mut();
         // SAFETY: valid out pointer.
-        assert_eq!(
-            unsafe { toothfuse_session_new(&mut p) },
-            toothfuse_status::Ok
-        );
+        let st = unsafe { toothfuse_session_new(&mut p) };
+        assert_eq!(st, toothfuse_status::Ok);
         S(p)
     }
     fn error(&self) -> String {
@@ -246,10 +244,8 @@ fn options_struct_size_is_checked_before_reading_fields() {
     let s = S::new();
     let mut o = toothfuse_options::default();
     // SAFETY: valid out pointer.
-    assert_eq!(
-        unsafe { toothfuse_options_default(&mut o) },
-        toothfuse_status::Ok
-    );
+    let st = unsafe { toothfuse_options_default(&mut o) };
+    assert_eq!(st, toothfuse_status::Ok);
     assert_eq!(o.struct_size, std::mem::size_of::<toothfuse_options>());
     o.struct_size = 4;
     // SAFETY: live session, valid options.
