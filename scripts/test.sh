@@ -8,6 +8,9 @@
 # tests against the installed package), an outside find_package consumer, a pkg-config build, and
 # the Python package: pip install ./bindings/python into a fresh venv (numpy and pytest from PyPI;
 # the library is the one cargo already built in target/) and its pytest suite run there.
+# tests against the installed package), an outside find_package consumer and a pkg-config build,
+# then scripts/check_sanitizers.sh (C/C++ tests under ASan+UBSan, valgrind memcheck, Miri over
+# the C-ABI unit tests) and scripts/check_fuzz.sh (every cargo-fuzz target for 20 s, nightly only).
 set -euo pipefail
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -127,5 +130,11 @@ python3 -m venv "$VENV"
   'import toothfuse; print("toothfuse", toothfuse.version(), "from", toothfuse.__file__)')
 (cd "$BUILD" && TOOTHFUSE_JAWS_DIR="$BUILD/cpp_tests/jaws" \
   "$VENV/bin/python" -m pytest -q "$ROOT/bindings/python/tests")
+
+section "sanitizers: ASan+UBSan C/C++ tests, valgrind memcheck, Miri (scripts/check_sanitizers.sh)"
+bash scripts/check_sanitizers.sh "$PREFIX" "$BUILD/cpp_tests"
+
+section "fuzzing: each cargo-fuzz target ${FUZZ_SECONDS:-20} s (scripts/check_fuzz.sh)"
+bash scripts/check_fuzz.sh
 
 section "all tests passed in $(($(date +%s) - START)) s"

@@ -34,3 +34,6 @@ pub use stages::*;
 pub use status::*;
 pub use version::*;
 pub use volume::*;
+
+#[cfg(test)]
+mod abi_tests;

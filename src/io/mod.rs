@@ -20,6 +20,7 @@ mod vtp_write;
 
 pub use labels::{ArrayInfo, KNOWN_LABEL_NAMES, MeshFile};
 pub use numbering::{Detected, detect_scheme, labels_to_fdi};
+pub use obj::read_obj_labeled_bytes;
 pub use ply::{read_ply_bytes, read_ply_bytes_with, write_ply};
 pub use stl::{read_stl_bytes, write_stl};
 pub use teeth::{

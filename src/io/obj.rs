@@ -53,6 +53,26 @@ pub(super) fn read_obj_with_labels(
     })
 }
 
+/// Reads an OBJ held in memory (`file` names it in error messages) and, when `labels` is
+/// given as `(name, bytes)`, its Teeth3DS label JSON (`{"jaw": "upper"|"lower", "labels": [one
+/// FDI number per vertex, 0 = gingiva]}`) as per-vertex labels.
+pub fn read_obj_labeled_bytes(
+    file: &str,
+    bytes: &[u8],
+    labels: Option<(&str, &[u8])>,
+) -> Result<LabeledMesh> {
+    let mesh = read_obj_bytes(file, bytes)?;
+    let vertex_labels = match labels {
+        Some((name, text)) => Some(parse_teeth3ds_labels(name, text, mesh.vertex_count())?),
+        None => None,
+    };
+    Ok(LabeledMesh {
+        mesh,
+        vertex_labels,
+        face_labels: None,
+    })
+}
+
 /// Reads the geometry of an OBJ held in memory; `file` names it in error messages.
 pub(super) fn read_obj_bytes(file: &str, bytes: &[u8]) -> Result<TriMesh> {
     let text = String::from_utf8_lossy(bytes);

@@ -37,19 +37,26 @@ impl<'a> Lex<'a> {
         }
     }
 
-    /// The next non-empty line, split into tokens (`None` at end of file).
+    /// The next line holding at least one token, split into tokens (`None` at end of file).
+    /// Lines of whitespace only (including Unicode whitespace such as a vertical tab, which
+    /// `skip_ws` does not skip) are passed over, so a returned line is never empty.
     fn line(&mut self) -> Option<Vec<String>> {
-        self.skip_ws();
-        if self.pos >= self.b.len() {
-            return None;
+        loop {
+            self.skip_ws();
+            if self.pos >= self.b.len() {
+                return None;
+            }
+            let end = self.b[self.pos..]
+                .iter()
+                .position(|&c| c == b'\n')
+                .map_or(self.b.len(), |e| self.pos + e);
+            let text = String::from_utf8_lossy(&self.b[self.pos..end]).into_owned();
+            self.pos = (end + 1).min(self.b.len());
+            let tokens: Vec<String> = text.split_whitespace().map(str::to_string).collect();
+            if !tokens.is_empty() {
+                return Some(tokens);
+            }
         }
-        let end = self.b[self.pos..]
-            .iter()
-            .position(|&c| c == b'\n')
-            .map_or(self.b.len(), |e| self.pos + e);
-        let text = String::from_utf8_lossy(&self.b[self.pos..end]).into_owned();
-        self.pos = (end + 1).min(self.b.len());
-        Some(text.split_whitespace().map(str::to_string).collect())
     }
 
     /// The next line without skipping blank lines (header lines).
@@ -80,7 +87,10 @@ impl<'a> Lex<'a> {
             _ => return Err(self.err(format!("{what}: unsupported data type {ty:?}"))),
         };
         if !self.binary {
-            let mut v = Vec::with_capacity(n.min(1 << 24));
+            // Every value takes at least one byte plus a separator, so what is left of the file
+            // bounds the allocation, whatever count the header declares.
+            let mut v =
+                Vec::with_capacity(n.min((self.b.len() - self.pos.min(self.b.len())) / 2 + 1));
             for i in 0..n {
                 self.skip_ws();
                 let start = self.pos;

@@ -78,7 +78,9 @@ pub(super) fn block(
     }
     let nb = nb as usize; // bounded: total == want and bs > 0, so nb <= want / bs + 1
     let mut pos = (3 + nb) * hs;
-    let mut out = Vec::with_capacity(want);
+    // Sized by what the compressed bytes can inflate to (zlib expands at most ~1032:1), not by
+    // the header alone: a header may declare gigabytes that the data does not hold.
+    let mut out = Vec::with_capacity(want.min(b.len().saturating_mul(1032)));
     for i in 0..nb {
         let cs = word(3 + i)? as usize;
         let src = b
