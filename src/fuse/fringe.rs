@@ -238,7 +238,7 @@ pub fn trim_fringe(
         if kept.len() == before {
             break;
         }
-        report.faces += before - kept.len();
+        let removed = before - kept.len();
         let cut = TriMesh::new(mesh.positions.clone(), kept);
         let (rep, rep_src, _) = repair_open_surface(
             &cut,
@@ -247,9 +247,9 @@ pub fn trim_fringe(
             },
         );
         if boundary_loops(&rep).len() != 1 {
-            return None;
+            break;
         }
-        map = rep_src
+        let next: Vec<u32> = rep_src
             .iter()
             .map(|&s| {
                 if s == u32::MAX {
@@ -259,9 +259,23 @@ pub fn trim_fringe(
                 }
             })
             .collect();
+        // The repair drops pieces the peeling cut off; should one reach beyond the fringe,
+        // this round is not kept (nothing beyond the reach is ever removed).
+        let mut still = vec![false; dist_in.len()];
+        for &s in next.iter().filter(|&&s| s != u32::MAX) {
+            still[s as usize] = true;
+        }
+        if map
+            .iter()
+            .any(|&s| s != u32::MAX && !still[s as usize] && dist_in[s as usize] > reach)
+        {
+            break;
+        }
+        report.faces += removed;
+        map = next;
         mesh = rep;
     }
-    if report.rounds == 0 {
+    if report.faces == 0 {
         return None;
     }
     let mut had = vec![false; dist_in.len()];

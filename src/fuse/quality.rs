@@ -43,6 +43,9 @@ pub struct ToothQuality {
     /// IOS crown vertices trimmed from the margin fringe (folded over other crown faces, or
     /// crossed by the band; all within the fringe reach of the original margin).
     pub ios_vertices_trimmed: usize,
+    /// Largest geodesic distance (mm) from the original margin of a trimmed IOS vertex (0 when
+    /// none was trimmed).
+    pub ios_trim_reach_mm: f64,
     /// CBCT faces removed by the crown cut.
     pub cbct_faces_removed: usize,
 }

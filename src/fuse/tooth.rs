@@ -392,6 +392,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     q.crown_vertices = ct.kept_ios;
     q.holes_filled = ct.holes_filled;
     q.ios_vertices_trimmed = trimmed.vertices;
+    q.ios_trim_reach_mm = trimmed.max_reach_mm;
     q.cbct_faces_removed = rc.removed_faces;
     if !(q.closed && q.manifold && q.components == 1) {
         let topo = EdgeTopology::new(&mesh);

@@ -1,0 +1,223 @@
+//! The output contract on inputs the project did not shape: rough phantom exports (raw slivers,
+//! folds, a margin clipped through triangles, holes, notches, label noise; coarse and dense) of
+//! every variant and both jaws, and the two foreign jaws of `../shared/data/foreign/` (an
+//! independent generator), each fused with its true transforms. On every tooth: closed,
+//! manifold, one component, positive volume; every kept IOS crown vertex bitwise at its
+//! transformed input position; no trimmed IOS vertex farther than 0.3 mm (along the surface)
+//! from the margin. Intersecting face pairs other than two kept input crown faces (exact test)
+//! and the trimmed share are bounded by what is measured, which is not yet the aim (none added,
+//! at most 0.5 % trimmed): see the bounds below and the README's fusion table.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use toothfuse::arch::Jaw;
+use toothfuse::fuse::{FuseOptions, FusedJaw, Preset, ToothTransforms, fuse_jaw, ios_crowns};
+use toothfuse::mesh::LabeledMesh;
+use toothfuse::mesh_check::self_intersections;
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
+use toothfuse::{Rigid, TriMesh};
+
+/// Measured bounds of one family of inputs: added crossing pairs per tooth, trimmed share.
+struct Bounds {
+    added_pairs: usize,
+    trimmed_share: f64,
+}
+
+/// Foreign jaws: measured at most 5 added pairs (2 of 28 teeth have any), at most 0.44 %
+/// trimmed.
+const FOREIGN: Bounds = Bounds {
+    added_pairs: 8,
+    trimmed_share: 0.005,
+};
+/// Rough phantom exports (much rougher than the foreign jaws: 4x their crossing crown pairs per
+/// crown on dense exports): measured at most 24 added pairs per tooth, at most 6.8 % trimmed
+/// (coarse crowns of a few hundred vertices).
+const ROUGH: Bounds = Bounds {
+    added_pairs: 30,
+    trimmed_share: 0.08,
+};
+
+/// Asserts the contract on every fused tooth; returns (teeth, trimmed vertices in all).
+fn check(
+    b: &Bounds,
+    tag: &str,
+    ios: &LabeledMesh,
+    fused: &FusedJaw,
+    tr: &BTreeMap<u8, ToothTransforms>,
+) -> (usize, usize) {
+    let crowns = ios_crowns(ios).expect("crowns");
+    let mut trimmed = 0;
+    for (fdi, t) in &fused.teeth {
+        let q = &t.quality;
+        let what = format!("{tag}: tooth {fdi}");
+        assert!(q.closed && q.manifold && q.components == 1, "{what}: {q:?}");
+        assert!(q.volume > 0.0, "{what}: volume {}", q.volume);
+        let added: Vec<(u32, u32)> = self_intersections(&t.mesh)
+            .into_iter()
+            .filter(|&(a, b)| {
+                (a as usize) >= t.band_faces.start || (b as usize) >= t.band_faces.start
+            })
+            .collect();
+        if !added.is_empty() {
+            println!("{what}: {} crossing pairs added", added.len());
+        }
+        assert!(
+            added.len() <= b.added_pairs,
+            "{what}: {} crossing pairs added by the fusion: {:?}",
+            added.len(),
+            &added[..added.len().min(6)]
+        );
+        let input = &crowns[fdi];
+        let to_out = tr[fdi].ios_to_output;
+        for (v, &s) in t.ios_vertex.iter().enumerate() {
+            if s != u32::MAX {
+                assert_eq!(
+                    t.mesh.positions[v],
+                    to_out.apply(input.positions[s as usize]),
+                    "{what}: vertex {v}"
+                );
+            }
+        }
+        let n = q.crown_vertices + q.ios_vertices_trimmed;
+        assert!(
+            q.ios_vertices_trimmed as f64 <= b.trimmed_share * n as f64,
+            "{what}: {} of {n} IOS vertices trimmed",
+            q.ios_vertices_trimmed
+        );
+        assert!(
+            q.ios_trim_reach_mm <= 0.3,
+            "{what}: trimmed {:.3} mm from the margin",
+            q.ios_trim_reach_mm
+        );
+        trimmed += q.ios_vertices_trimmed;
+    }
+    (fused.teeth.len(), trimmed)
+}
+
+fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
+    for &(seed, jaw, variant, export) in cases {
+        let mut opts = PhantomOptions {
+            seed,
+            jaw,
+            variant,
+            ..Default::default()
+        };
+        opts.realism.ios.rough = export.roughness();
+        let p = Phantom::generate(&opts).expect("phantom");
+        let tr = toothfuse::eval::true_transforms(&p);
+        let fused =
+            fuse_jaw(&p.ios, &p.cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
+        let tag = format!("seed {seed} {jaw:?} {} {}", variant.name(), export.name());
+        // Measured: one coarse lower incisor (seed 20, tooth 31) fails its cut ("cut loop winds
+        // 0.00 times"); every other tooth of these jaws is fused (none lost to label noise or
+        // holes).
+        for (f, e) in &fused.failed {
+            println!("{tag}: tooth {f} failed: {e}");
+        }
+        assert!(fused.failed.len() <= 1, "{tag}: failed {:?}", fused.failed);
+        let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
+        println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");
+    }
+}
+
+use Jaw::{Lower, Upper};
+use Variant::{Full, HeavyDrift, MetalArtefact, MissingTeeth, PartialArch};
+
+#[test]
+fn rough_full_arches() {
+    rough_jaws(&[
+        (11, Upper, Full, IosExport::Rough),
+        (12, Lower, Full, IosExport::Rough),
+        (13, Upper, HeavyDrift, IosExport::Rough),
+        (14, Lower, MetalArtefact, IosExport::Rough),
+        (15, Upper, MissingTeeth, IosExport::Rough),
+    ]);
+}
+
+#[test]
+fn coarse_and_partial_arches() {
+    rough_jaws(&[
+        (16, Lower, Full, IosExport::Coarse),
+        (17, Upper, MetalArtefact, IosExport::Coarse),
+        (18, Lower, PartialArch, IosExport::Rough),
+        (19, Upper, PartialArch, IosExport::Coarse),
+        (20, Lower, MissingTeeth, IosExport::Coarse),
+        (21, Upper, HeavyDrift, IosExport::Coarse),
+        (22, Lower, PartialArch, IosExport::Dense2),
+        (23, Upper, PartialArch, IosExport::Rough),
+    ]);
+}
+
+/// Dense exports (2x, 4x, subdivided): ~2.5 min of CPU, outside the test command's time budget;
+/// `cargo test --release --test fuse_rough -- --ignored`.
+#[test]
+#[ignore]
+fn dense_arches() {
+    rough_jaws(&[
+        (24, Upper, PartialArch, IosExport::Dense4),
+        (25, Lower, Full, IosExport::Dense2),
+        (26, Lower, HeavyDrift, IosExport::Rough),
+        (27, Upper, PartialArch, IosExport::Subdivided),
+        (28, Lower, MetalArtefact, IosExport::Dense2),
+        (29, Upper, MissingTeeth, IosExport::Rough),
+        (30, Lower, PartialArch, IosExport::Dense4),
+    ]);
+}
+
+fn foreign_dir() -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/foreign");
+    d.is_dir().then_some(d)
+}
+
+/// The foreign case's true CBCT → IOS transforms (output frame = IOS frame).
+fn foreign_truth(dir: &std::path::Path) -> BTreeMap<u8, ToothTransforms> {
+    let text = std::fs::read_to_string(dir.join("truth/transforms.json")).expect("truth");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    v["ios_from_cbct"]
+        .as_object()
+        .expect("ios_from_cbct")
+        .iter()
+        .map(|(k, m)| {
+            let a: Vec<f64> = m
+                .as_array()
+                .expect("rows")
+                .iter()
+                .flat_map(|r| {
+                    r.as_array()
+                        .expect("row")
+                        .iter()
+                        .map(|x| x.as_f64().expect("number"))
+                })
+                .collect();
+            let a: [f64; 16] = a.try_into().expect("4x4");
+            (
+                k.parse::<u8>().expect("fdi"),
+                ToothTransforms {
+                    cbct_to_output: Rigid::from_row_major(&a),
+                    ios_to_output: Rigid::IDENTITY,
+                },
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn foreign_jaws() {
+    let Some(dir) = foreign_dir() else {
+        println!("SKIPPED: ../shared/data/foreign is not beside the checkout");
+        return;
+    };
+    for case in ["f901_upper", "f902_lower"] {
+        let d = dir.join(case);
+        let ios = toothfuse::io::read_mesh(d.join("ios.ply")).expect("ios");
+        let cbct: BTreeMap<u8, TriMesh> =
+            toothfuse::io::read_teeth(d.join("cbct.ply")).expect("cbct");
+        let tr = foreign_truth(&d);
+        let fused =
+            fuse_jaw(&ios, &cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
+        assert!(fused.failed.is_empty(), "{case}: failed {:?}", fused.failed);
+        assert_eq!(fused.teeth.len(), 14, "{case}");
+        let (n, trimmed) = check(&FOREIGN, case, &ios, &fused, &tr);
+        println!("{case}: {n} teeth fused, {trimmed} IOS vertices trimmed");
+    }
+}
