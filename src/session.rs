@@ -424,11 +424,11 @@ mod tests {
         assert!(s.ios_repair().is_some());
     }
 
-    /// Two cubes (teeth 31, 32) and a square of gingiva in one mesh.
+    /// Two 8 mm cubes (teeth 31, 32) and a square of gingiva in one mesh.
     fn jaw() -> (TriMesh, Vec<i32>) {
-        let mut m = cube(1.0);
-        let mut c2 = cube(1.0);
-        c2.transform(&crate::Rigid::from_translation(DVec3::new(3.0, 0.0, 0.0)));
+        let mut m = cube(8.0);
+        let mut c2 = cube(8.0);
+        c2.transform(&crate::Rigid::from_translation(DVec3::new(10.0, 0.0, 0.0)));
         m.append(&c2);
         let mut g = square();
         g.transform(&crate::Rigid::from_translation(DVec3::new(0.0, 0.0, -2.0)));

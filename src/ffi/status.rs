@@ -142,7 +142,7 @@ mod tests {
             let m = s.message();
             assert!(m.ends_with('\0') && m.len() > 2 && !m[..m.len() - 1].contains('\0'));
         }
-        assert_eq!(toothfuse_status::from_u32(14), None);
+        assert_eq!(toothfuse_status::from_u32(16), None);
         assert_eq!(
             toothfuse_status::from(ErrorKind::NotManifold),
             toothfuse_status::NotManifold
