@@ -82,10 +82,7 @@ fn mirrored(t: &Teeth) -> Teeth {
 /// Each crown takes the number of its neighbour one step along the arch (the last is dropped).
 fn shifted(t: &Teeth) -> Teeth {
     let order = arch_order(&t.keys().copied().collect::<Vec<_>>());
-    order
-        .windows(2)
-        .map(|w| (w[1], t[&w[0]].clone()))
-        .collect()
+    order.windows(2).map(|w| (w[1], t[&w[0]].clone())).collect()
 }
 
 /// Two neighbouring crowns exchange their numbers; returns them too.
@@ -148,7 +145,11 @@ fn case(kind: Kind, seed: u64) -> (Teeth, Teeth, Expect) {
             } else {
                 (i, scaled(&c, f), "CBCT")
             };
-            (i, c, Expect::Refused(ErrorKind::UnitMismatch, vec![m, unit]))
+            (
+                i,
+                c,
+                Expect::Refused(ErrorKind::UnitMismatch, vec![m, unit]),
+            )
         }
         Kind::MirroredIos => (
             mirrored(&i),
@@ -180,7 +181,11 @@ fn case(kind: Kind, seed: u64) -> (Teeth, Teeth, Expect) {
         ),
         Kind::Swapped => {
             let (s, a, b) = swapped(&i, seed);
-            (s, c, Expect::Skipped(vec![a, b], vec!["misnumbered", "swapped"]))
+            (
+                s,
+                c,
+                Expect::Skipped(vec![a, b], vec!["misnumbered", "swapped"]),
+            )
         }
     }
 }
@@ -193,12 +198,20 @@ fn lower_jaw(k: u64) -> &'static Jaw3 {
     }
 }
 
-fn check(kind: Kind, seed: u64, r: Result<Registration>, e: &Expect) -> std::result::Result<(), String> {
+fn check(
+    kind: Kind,
+    seed: u64,
+    r: Result<Registration>,
+    e: &Expect,
+) -> std::result::Result<(), String> {
     match (e, r) {
         (Expect::Refused(k, words), Err(err)) => {
             let m = err.to_string();
             if err.kind() != *k || !words.iter().all(|w| m.contains(w)) {
-                return Err(format!("{kind:?} seed {seed}: wrong cause: {:?} {m}", err.kind()));
+                return Err(format!(
+                    "{kind:?} seed {seed}: wrong cause: {:?} {m}",
+                    err.kind()
+                ));
             }
             Ok(())
         }
@@ -210,14 +223,20 @@ fn check(kind: Kind, seed: u64, r: Result<Registration>, e: &Expect) -> std::res
         (Expect::Skipped(teeth, words), Ok(r)) => {
             for t in teeth {
                 let Some(s) = r.skipped.iter().find(|s| s.fdi == *t) else {
-                    return Err(format!("{kind:?} seed {seed}: tooth {t} not skipped: {:?}", r.skipped));
+                    return Err(format!(
+                        "{kind:?} seed {seed}: tooth {t} not skipped: {:?}",
+                        r.skipped
+                    ));
                 };
                 if !words.iter().all(|w| s.reason.contains(w)) {
                     return Err(format!("{kind:?} seed {seed}: tooth {t}: {}", s.reason));
                 }
             }
             if r.teeth.len() + teeth.len() < 14 {
-                return Err(format!("{kind:?} seed {seed}: too few teeth kept: {:?}", r.skipped));
+                return Err(format!(
+                    "{kind:?} seed {seed}: too few teeth kept: {:?}",
+                    r.skipped
+                ));
             }
             Ok(())
         }
@@ -256,10 +275,18 @@ fn every_wrong_data_kind_is_caught_on_ten_seeds() {
 fn valid_jaws() -> Vec<(String, &'static Jaw3)> {
     let mut v: Vec<(String, &'static Jaw3)> = SEEDS
         .chain([11])
-        .map(|s| (format!("upper full {s}"), phantom(s, Jaw::Upper, Variant::Full)))
+        .map(|s| {
+            (
+                format!("upper full {s}"),
+                phantom(s, Jaw::Upper, Variant::Full),
+            )
+        })
         .collect();
     for var in &Variant::ALL[1..] {
-        v.push((format!("upper {} 1", var.name()), phantom(1, Jaw::Upper, *var)));
+        v.push((
+            format!("upper {} 1", var.name()),
+            phantom(1, Jaw::Upper, *var),
+        ));
     }
     for k in 1..=6 {
         v.push((format!("lower #{k}"), lower_jaw(k)));
@@ -342,7 +369,12 @@ fn accept_questionable_registers_and_carries_the_flag() {
     let json: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
     assert_eq!(json["questionable"], true);
     let findings = json["questionable_findings"].as_array().unwrap();
-    assert!(findings.iter().any(|f| f.as_str().unwrap().contains("swapped")), "{findings:?}");
+    assert!(
+        findings
+            .iter()
+            .any(|f| f.as_str().unwrap().contains("swapped")),
+        "{findings:?}"
+    );
     let warned = r
         .teeth
         .values()
@@ -443,15 +475,29 @@ fn c_abi_unit_checks_on_entry_and_the_override_flag() {
     let (v, t) = flat(&scaled(&p.cbct, 0.001)[&11]);
     let st = s.add(TOOTHFUSE_MODALITY_CBCT, 11, &v, &t);
     assert_eq!(st, toothfuse_status::UnitMismatch, "{}", s.error());
-    assert!(s.error().contains("CBCT") && s.error().contains("metres"), "{}", s.error());
+    assert!(
+        s.error().contains("CBCT") && s.error().contains("metres"),
+        "{}",
+        s.error()
+    );
     // A jaw in micrometres: refused on entry.
     let st = add_jaw(&s, TOOTHFUSE_MODALITY_IOS, &scaled(&p.crowns, 1000.0));
     assert_eq!(st, toothfuse_status::UnitMismatch, "{}", s.error());
-    assert!(s.error().contains("IOS") && s.error().contains("micrometres"), "{}", s.error());
+    assert!(
+        s.error().contains("IOS") && s.error().contains("micrometres"),
+        "{}",
+        s.error()
+    );
     // Swapped labels accepted with the override: the report carries the flag.
     let (i, c, _) = case(Kind::Swapped, 2);
-    assert_eq!(add_jaw(&s, TOOTHFUSE_MODALITY_IOS, &i), toothfuse_status::Ok);
-    assert_eq!(add_jaw(&s, TOOTHFUSE_MODALITY_CBCT, &c), toothfuse_status::Ok);
+    assert_eq!(
+        add_jaw(&s, TOOTHFUSE_MODALITY_IOS, &i),
+        toothfuse_status::Ok
+    );
+    assert_eq!(
+        add_jaw(&s, TOOTHFUSE_MODALITY_CBCT, &c),
+        toothfuse_status::Ok
+    );
     let mut o = toothfuse_options::default();
     o.accept_questionable = 1;
     // SAFETY: live session, valid options.
@@ -464,7 +510,9 @@ fn c_abi_unit_checks_on_entry_and_the_override_flag() {
     // SAFETY: buffer of the queried size.
     let st = unsafe { toothfuse_session_report_json(s.0, buf.as_mut_ptr().cast(), len, &mut len) };
     assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
-    let text = String::from_utf8_lossy(&buf).trim_end_matches('\0').to_string();
+    let text = String::from_utf8_lossy(&buf)
+        .trim_end_matches('\0')
+        .to_string();
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(json["questionable"], true, "{text}");
 }
@@ -486,11 +534,25 @@ fn cli_refuses_and_names_every_kind() {
         let (ip, cp) = (dir.join("ios.ply"), dir.join("cbct.ply"));
         write_teeth(&ip, &i);
         write_teeth(&cp, &c);
-        let sub = if matches!(e, Expect::Skipped(..)) { "register" } else { "fuse" };
+        let sub = if matches!(e, Expect::Skipped(..)) {
+            "register"
+        } else {
+            "fuse"
+        };
         let out = dir.join("out");
         let o = Command::new(env!("CARGO_BIN_EXE_toothfuse"))
-            .args([sub, "--ios", ip.to_str().unwrap(), "--cbct", cp.to_str().unwrap()])
-            .args(if sub == "fuse" { vec!["--out", out.to_str().unwrap()] } else { vec![] })
+            .args([
+                sub,
+                "--ios",
+                ip.to_str().unwrap(),
+                "--cbct",
+                cp.to_str().unwrap(),
+            ])
+            .args(if sub == "fuse" {
+                vec!["--out", out.to_str().unwrap()]
+            } else {
+                vec![]
+            })
             .output()
             .expect("run toothfuse");
         let (stdout, stderr) = (
@@ -501,7 +563,10 @@ fn cli_refuses_and_names_every_kind() {
             Expect::Refused(_, words) => {
                 assert!(!o.status.success(), "{kind:?}: exit 0\n{stdout}");
                 assert_eq!(stderr.lines().count(), 1, "{kind:?}: {stderr}");
-                assert!(words.iter().all(|w| stderr.contains(w)), "{kind:?}: {stderr}");
+                assert!(
+                    words.iter().all(|w| stderr.contains(w)),
+                    "{kind:?}: {stderr}"
+                );
             }
             Expect::Skipped(teeth, words) => {
                 assert!(o.status.success(), "{kind:?}: {stderr}");

@@ -18,12 +18,12 @@ pub mod icp;
 mod options;
 mod report;
 
+pub use gate::{GateReport, ToothEvidence};
 pub use icp::{Convergence, RobustKernel, WeightOptions};
 pub use options::{
     CentroidMode, Correspondence, DriftOptions, FineMode, GuardOptions, OutputFrame, Preset,
     RegisterOptions, StageOptions,
 };
-pub use gate::{GateReport, ToothEvidence};
 pub use report::{Report, SkippedReport, ToothReport};
 
 use crate::mesh::TriMesh;
@@ -590,7 +590,9 @@ fn run_gate(
         if !opts.accept_questionable {
             return Err(e);
         }
-        report.accepted.push(format!("{e} (accepted as questionable)"));
+        report
+            .accepted
+            .push(format!("{e} (accepted as questionable)"));
     }
     for (f, why) in v.skip {
         if opts.accept_questionable {
@@ -600,7 +602,10 @@ fn run_gate(
             warnings.insert(f, format!("{why} (accepted as questionable)"));
         } else {
             teeth.remove(&f);
-            skipped.push(Skipped { fdi: f, reason: why });
+            skipped.push(Skipped {
+                fdi: f,
+                reason: why,
+            });
         }
     }
     skipped.sort_by_key(|s| s.fdi);
