@@ -461,7 +461,10 @@ fn c_abi_names_every_kind() {
                         found.push(f as u8);
                     }
                 }
-                assert_eq!(&found, teeth, "{kind:?}");
+                found.sort_unstable();
+                let mut want = teeth.clone();
+                want.sort_unstable();
+                assert_eq!(found, want, "{kind:?}");
             }
         }
     }
@@ -506,6 +509,7 @@ fn c_abi_unit_checks_on_entry_and_the_override_flag() {
     let mut len = 0usize;
     // SAFETY: size query.
     unsafe { toothfuse_session_report_json(s.0, std::ptr::null_mut(), 0, &mut len) };
+    len += 1; // the terminating NUL
     let mut buf = vec![0u8; len];
     // SAFETY: buffer of the queried size.
     let st = unsafe { toothfuse_session_report_json(s.0, buf.as_mut_ptr().cast(), len, &mut len) };
