@@ -28,8 +28,8 @@ struct Jaw3 {
 
 fn phantom(seed: u64, jaw: Jaw, variant: Variant) -> &'static Jaw3 {
     type Key = (u64, Jaw, &'static str);
-    static CACHE: OnceLock<Mutex<BTreeMap<Key, &'static Mutex<Option<&'static Jaw3>>>>> =
-        OnceLock::new();
+    type Slot = &'static Mutex<Option<&'static Jaw3>>;
+    static CACHE: OnceLock<Mutex<BTreeMap<Key, Slot>>> = OnceLock::new();
     let slot = *CACHE
         .get_or_init(Default::default)
         .lock()
@@ -501,8 +501,10 @@ fn c_abi_unit_checks_on_entry_and_the_override_flag() {
         add_jaw(&s, TOOTHFUSE_MODALITY_CBCT, &c),
         toothfuse_status::Ok
     );
-    let mut o = toothfuse_options::default();
-    o.accept_questionable = 1;
+    let o = toothfuse_options {
+        accept_questionable: 1,
+        ..toothfuse_options::default()
+    };
     // SAFETY: live session, valid options.
     let st = unsafe { toothfuse_session_register(s.0, &o) };
     assert_eq!(st, toothfuse_status::Ok, "{}", s.error());

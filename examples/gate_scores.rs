@@ -1,4 +1,8 @@
-//! Probe: valid vs another patient.
+//! The registration gate's scores on phantoms: each seed's own IOS and CBCT (valid) and the
+//! previous seed's IOS with this seed's CBCT (another patient). The figures of docs/errors.md.
+//!
+//! `cargo run --release --example gate_scores -- FIRST_SEED LAST_SEED JAW(0 upper, 1 lower)
+//! VARIANT(0 full, 1 missing, 2 partial, 3 metal, 4 drift)`
 use toothfuse::arch::Jaw;
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 use toothfuse::register::{GateReport, RegisterOptions, register};
@@ -46,14 +50,19 @@ fn main() {
         let mut o = RegisterOptions::default().without_fine();
         o.coarse = None;
         o.accept_questionable = true;
-        let r = register(&p.ios_crowns(), &p.cbct, &o).unwrap();
+        let Ok(r) = register(&p.ios_crowns(), &p.cbct, &o) else {
+            println!("{seed} {variant:?}: fewer than 3 teeth in both, skipped");
+            prev = Some(p);
+            continue;
+        };
         println!(
             "{seed} {variant:?} valid: {} t {:.0}",
             stats(&r.gate),
             r.timing.gate_ms
         );
-        if let Some(q) = &prev {
-            let r = register(&q.ios_crowns(), &p.cbct, &o).unwrap();
+        if let Some(q) = &prev
+            && let Ok(r) = register(&q.ios_crowns(), &p.cbct, &o)
+        {
             println!("{seed} other: {} t {:.0}", stats(&r.gate), r.timing.gate_ms);
         }
         prev = Some(p);
