@@ -44,6 +44,10 @@ const BETTER: f64 = 0.6;
 /// jaw's reflection fits about half as well, a mirrored jaw's about twice as well: 0.5-0.6
 /// measured on the phantoms either way).
 const MIRROR_BETTER: f64 = 0.75;
+/// A hypothesis wins only with a median fit below this (mm): a clear fit.
+const CLEAR_FIT_MM: f64 = 0.35;
+/// Fewest teeth in both modalities for the "does not match" verdict.
+const MIN_TEETH_FOR_MISMATCH: usize = 6;
 /// Median per-tooth fit (mm) under which the given data are never said to fit worse than an
 /// alternative: a fit this good is the right one whatever an alternative gives.
 const GOOD_FIT_MM: f64 = 0.2;
@@ -326,7 +330,7 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
     report.mismatch = report.fit_mm / FIT_REF_MM + report.tooth_translation_mm / TRANSLATION_REF_MM;
     report.ios_handed_ok = ios_handedness(teeth);
     let jaw = jaw_verdict(&report, shifted_best.1);
-    let skip = if jaw.is_some() {
+    let skip = if jaw.is_some() || report.fit_mm > CLEAR_FIT_MM {
         Vec::new()
     } else {
         misnumbered(&report)
@@ -378,7 +382,14 @@ fn tooth_evidence(
 }
 
 fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
-    if r.fit_mm > GOOD_FIT_MM && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm {
+    // A short arch's nearly collinear teeth leave the quick fit's rotation about the arch line
+    // loose (the full registration restarts for that): its verdicts need a hypothesis that fits
+    // well, and the "does not match" verdict needs a long enough arch.
+    let long_arch = r.teeth.len() >= MIN_TEETH_FOR_MISMATCH;
+    if r.fit_mm > GOOD_FIT_MM
+        && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm
+        && r.mirrored_fit_mm < CLEAR_FIT_MM
+    {
         let which = match r.ios_handed_ok {
             Some(false) => {
                 "the IOS is mirrored (its crowns' occlusal side and its left and right teeth \
@@ -397,7 +408,10 @@ fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
             r.fit_mm, r.mirrored_fit_mm
         )));
     }
-    if r.fit_mm > GOOD_FIT_MM && r.shifted_fit_mm < BETTER * r.fit_mm {
+    if r.fit_mm > GOOD_FIT_MM
+        && r.shifted_fit_mm < BETTER * r.fit_mm
+        && r.shifted_fit_mm < CLEAR_FIT_MM
+    {
         return Some(Error::RegistrationRejected(format!(
             "labels shifted by one tooth along the arch: the IOS crowns fit the CBCT teeth one \
              position {} with a median distance of {:.2} mm, but {:.2} mm with the labels as \
@@ -411,7 +425,7 @@ fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
             r.fit_mm
         )));
     }
-    if r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH {
+    if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
         return Some(Error::RegistrationRejected(format!(
             "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
              crowns lie a median {:.2} mm from their CBCT teeth and each tooth fitted alone moves across its axis \
