@@ -126,6 +126,17 @@ enum toothfuse_status
    * The session was poisoned by an earlier panic; free it and start a new one.
    */
   TOOTHFUSE_STATUS_POISONED = 13,
+  /**
+   * One modality is a mirror image of the other (x -> -x, or an LPS/RAS conversion applied to
+   * one modality only); the message names the evidence. Nothing was registered.
+   */
+  TOOTHFUSE_STATUS_MIRRORED = 14,
+  /**
+   * The registration gate refused the data: the IOS and the CBCT do not belong together
+   * (another patient, the other jaw, tooth numbers shifted along the arch); the message names
+   * the likely cause. Set `accept_questionable` in the options to register anyway.
+   */
+  TOOTHFUSE_STATUS_REGISTRATION_REJECTED = 15,
 };
 #ifndef __cplusplus
 typedef uint32_t toothfuse_status;
@@ -211,6 +222,14 @@ typedef struct toothfuse_options {
    * TOOTHFUSE_FRAME_CBCT (default) or TOOTHFUSE_FRAME_IOS.
    */
   toothfuse_frame frame;
+  /**
+   * 0 (default): data the registration gate finds questionable (mirrored, another patient,
+   * shifted or misnumbered labels) are refused (TOOTHFUSE_STATUS_MIRRORED,
+   * TOOTHFUSE_STATUS_REGISTRATION_REJECTED) or their teeth skipped; 1: registered anyway, the
+   * findings then listed under `"questionable"` in the report JSON and as tooth warnings.
+   * Appended after `frame`: a caller whose `struct_size` ends before it gets 0.
+   */
+  uint32_t accept_questionable;
 } toothfuse_options;
 
 /**

@@ -29,6 +29,10 @@ pub enum ErrorKind {
     Io,
     /// The operation needs an earlier step first (for example fusing before registering).
     WrongState,
+    /// One modality is a mirror image of the other (or of its own tooth numbering).
+    Mirrored,
+    /// The registration gate found that the IOS and the CBCT do not belong together.
+    RegistrationRejected,
 }
 
 /// Everything that can go wrong in toothfuse. Messages say what is at fault and how to fix it.
@@ -91,6 +95,11 @@ pub enum Error {
     Io(String),
     /// The operation needs an earlier step first.
     WrongState(String),
+    /// One modality is a mirror image of the other; the message names the evidence.
+    Mirrored(String),
+    /// The IOS and the CBCT do not belong together (another patient, the other jaw, shifted
+    /// tooth numbers); the message names the likely cause.
+    RegistrationRejected(String),
     /// An error that concerns one tooth, by FDI number.
     Tooth {
         /// FDI number of the tooth.
@@ -117,6 +126,8 @@ impl Error {
             Error::DidNotConverge(_) => ErrorKind::DidNotConverge,
             Error::Io(_) => ErrorKind::Io,
             Error::WrongState(_) => ErrorKind::WrongState,
+            Error::Mirrored(_) => ErrorKind::Mirrored,
+            Error::RegistrationRejected(_) => ErrorKind::RegistrationRejected,
             Error::Tooth { inner, .. } => inner.kind(),
         }
     }
@@ -180,6 +191,8 @@ impl fmt::Display for Error {
             Error::DidNotConverge(m) => write!(f, "did not converge: {m}"),
             Error::Io(m) => write!(f, "i/o: {m}"),
             Error::WrongState(m) => write!(f, "wrong state: {m}"),
+            Error::Mirrored(m) => write!(f, "mirrored: {m}"),
+            Error::RegistrationRejected(m) => write!(f, "registration rejected: {m}"),
             Error::Tooth { fdi, inner } => write!(f, "tooth {fdi}: {inner}"),
         }
     }

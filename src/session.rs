@@ -153,6 +153,8 @@ impl Session {
             _ => (mesh, source, None),
         };
         let report = Self::validate_tooth(modality, fdi, &mesh)?;
+        crate::units::check_entry_scale(&mesh, &modality.to_string())
+            .map_err(|e| e.in_tooth(fdi))?;
         Ok(Tooth {
             fdi,
             mesh,
@@ -221,7 +223,9 @@ impl Session {
             .map_err(|e| e.in_tooth(fdi))
     }
 
-    /// Adds (or replaces) tooth `fdi` of `modality`. On error nothing changes.
+    /// Adds (or replaces) tooth `fdi` of `modality`. On error nothing changes. A tooth whose size
+    /// no millimetre unit can give ([`crate::units::ENTRY_DIAGONAL_MM`]) is refused with
+    /// `UnitMismatch`; sizes that are only implausible for a whole jaw are judged at registration.
     pub fn add_tooth(&mut self, modality: Modality, fdi: i32, mesh: TriMesh) -> Result<()> {
         let key = check_fdi(fdi)?;
         let source = (0..mesh.positions.len() as u32).collect();
@@ -235,8 +239,10 @@ impl Session {
     /// nothing. Label 0 is gingiva and is dropped; any other label must be an FDI number (the
     /// error names the first bad label and the vertex or face carrying it). With per-vertex
     /// labels a face belongs to a tooth when all three of its vertices carry that label, so a
-    /// crown ends at its margin. Teeth of `modality` not in the jaw are kept. Returns the FDI
-    /// numbers added, ascending.
+    /// crown ends at its margin. Teeth of `modality` not in the jaw are kept. The teeth's median
+    /// size must be plausible in millimetres ([`crate::units::check_jaw_scales`]), else
+    /// `UnitMismatch` names the modality and the likely unit. Returns the FDI numbers added,
+    /// ascending.
     pub fn add_jaw(
         &mut self,
         modality: Modality,
@@ -281,6 +287,12 @@ impl Session {
                 "the {modality} jaw mesh has no tooth: no triangle carries an FDI label"
             )));
         }
+        let meshes: BTreeMap<u8, TriMesh> =
+            staged.iter().map(|t| (t.fdi, t.mesh.clone())).collect();
+        match modality {
+            Modality::Ios => crate::units::check_jaw_scales(&meshes, &BTreeMap::new()),
+            Modality::Cbct => crate::units::check_jaw_scales(&BTreeMap::new(), &meshes),
+        }?;
         let added = staged.iter().map(|t| t.fdi).collect();
         self.drop_results();
         let teeth = self.teeth_mut(modality);
@@ -413,11 +425,11 @@ mod tests {
         assert!(s.ios_repair().is_some());
     }
 
-    /// Two cubes (teeth 31, 32) and a square of gingiva in one mesh.
+    /// Two 8 mm cubes (teeth 31, 32) and a square of gingiva in one mesh.
     fn jaw() -> (TriMesh, Vec<i32>) {
-        let mut m = cube(1.0);
-        let mut c2 = cube(1.0);
-        c2.transform(&crate::Rigid::from_translation(DVec3::new(3.0, 0.0, 0.0)));
+        let mut m = cube(8.0);
+        let mut c2 = cube(8.0);
+        c2.transform(&crate::Rigid::from_translation(DVec3::new(10.0, 0.0, 0.0)));
         m.append(&c2);
         let mut g = square();
         g.transform(&crate::Rigid::from_translation(DVec3::new(0.0, 0.0, -2.0)));

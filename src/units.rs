@@ -137,3 +137,93 @@ pub fn check_consistent_scales(ios_sizes: &[f64], cbct_sizes: &[f64]) -> Result<
     }
     Ok(())
 }
+
+/// Plausible median bounding-box diagonal (mm) of the IOS crowns of a jaw: an incisor crown of a
+/// primary tooth or a teeth-only patch is ~4 mm, a molar crown ~14 mm.
+pub const IOS_MEDIAN_DIAGONAL_MM: (f64, f64) = (3.0, 40.0);
+/// Plausible median bounding-box diagonal (mm) of the CBCT teeth of a jaw: a primary incisor is
+/// ~15 mm, a permanent molar ~25 mm (crown-only CBCT segmentations ~10 mm).
+pub const CBCT_MEDIAN_DIAGONAL_MM: (f64, f64) = (6.0, 80.0);
+/// Bounds (mm) of a single tooth's bounding-box diagonal outside which it is refused on entry:
+/// only what no unit in millimetres can give (a tooth in metres is ~0.005-0.03, in micrometres
+/// ~4000-30000). The range between is judged at registration over all teeth
+/// ([`check_jaw_scales`]).
+pub const ENTRY_DIAGONAL_MM: (f64, f64) = (0.5, 250.0);
+
+/// The likely unit of a length `d` that should lie in `range` millimetres: "metres (x1000)",
+/// "centimetres (x10)", "micrometres (/1000)", or `None` when no such factor brings it in.
+fn likely_unit(d: f64, range: (f64, f64)) -> Option<&'static str> {
+    let ok = |x: f64| (range.0..=range.1).contains(&x);
+    [
+        (1000.0, "metres: convert to millimetres (x1000)"),
+        (10.0, "centimetres: convert to millimetres (x10)"),
+        (0.001, "micrometres: convert to millimetres (/1000)"),
+    ]
+    .into_iter()
+    .find(|&(f, _)| ok(d * f))
+    .map(|(_, u)| u)
+}
+
+fn scale_message(modality: &str, what: &str, d: f64, range: (f64, f64)) -> String {
+    let unit = likely_unit(d, range).map_or_else(
+        || "far from any tooth size in millimetres".to_string(),
+        |u| format!("looks like {u}"),
+    );
+    format!(
+        "{modality} {what} {d:.4} is outside the plausible {}-{} mm: {modality} {unit}",
+        range.0, range.1
+    )
+}
+
+/// The entry check of one tooth of `modality` (an [`Error::UnitMismatch`] naming the modality and
+/// the likely unit when its bounding-box diagonal is outside [`ENTRY_DIAGONAL_MM`]).
+pub fn check_entry_scale(mesh: &TriMesh, modality: &str) -> Result<()> {
+    match bbox_diagonal(mesh) {
+        Some(d) if d.is_finite() && !(ENTRY_DIAGONAL_MM.0..=ENTRY_DIAGONAL_MM.1).contains(&d) => {
+            Err(Error::UnitMismatch(scale_message(
+                modality,
+                "tooth bounding-box diagonal",
+                d,
+                if d < ENTRY_DIAGONAL_MM.0 {
+                    CBCT_MEDIAN_DIAGONAL_MM
+                } else {
+                    (TOOTH_DIAGONAL_MIN_MM, TOOTH_DIAGONAL_MAX_MM)
+                },
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The registration-time check over all teeth of both modalities: each modality's median
+/// bounding-box diagonal in its plausible range ([`IOS_MEDIAN_DIAGONAL_MM`],
+/// [`CBCT_MEDIAN_DIAGONAL_MM`]) and the two at the same scale ([`check_consistent_scales`] on
+/// [`tooth_width`]). The [`Error::UnitMismatch`] names the modality and the likely unit. Passes
+/// when a modality has no teeth.
+pub fn check_jaw_scales(
+    ios: &std::collections::BTreeMap<u8, TriMesh>,
+    cbct: &std::collections::BTreeMap<u8, TriMesh>,
+) -> Result<()> {
+    let diag = |m: &std::collections::BTreeMap<u8, TriMesh>| {
+        median(&m.values().filter_map(bbox_diagonal).collect::<Vec<_>>())
+    };
+    for (name, what, d, range) in [
+        ("IOS", "median crown", diag(ios), IOS_MEDIAN_DIAGONAL_MM),
+        ("CBCT", "median tooth", diag(cbct), CBCT_MEDIAN_DIAGONAL_MM),
+    ] {
+        if let Some(d) = d
+            && !(range.0..=range.1).contains(&d)
+        {
+            return Err(Error::UnitMismatch(scale_message(
+                name,
+                &format!("{what} bounding-box diagonal"),
+                d,
+                range,
+            )));
+        }
+    }
+    let width = |m: &std::collections::BTreeMap<u8, TriMesh>| {
+        m.values().filter_map(tooth_width).collect::<Vec<_>>()
+    };
+    check_consistent_scales(&width(ios), &width(cbct))
+}

@@ -9,9 +9,10 @@ use toothfuse::ffi::*;
 #[test]
 fn labeled_jaw_split_all_or_nothing() {
     let s = Session::new();
-    // Two cubes (FDI 21, 22) and a gingiva square, labeled per vertex.
-    let (mut v, mut t) = cube(2.0, [0.0; 3]);
-    let (v2, t2) = cube(2.0, [5.0, 0.0, 0.0]);
+    // Two 8 mm cubes (FDI 21, 22; a CBCT jaw of smaller teeth is refused as not millimetres)
+    // and a gingiva square, labeled per vertex.
+    let (mut v, mut t) = cube(8.0, [0.0; 3]);
+    let (v2, t2) = cube(8.0, [12.0, 0.0, 0.0]);
     v.extend(&v2);
     t.extend(t2.iter().map(|i| i + 8));
     let (g, gt) = square();

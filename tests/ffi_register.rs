@@ -32,6 +32,7 @@ fn options_default_and_validation() {
         struct_size: 0,
         preset: 9,
         frame: 9,
+        accept_questionable: 9,
     };
     // SAFETY: valid out pointer; NULL checked.
     unsafe {
@@ -44,6 +45,7 @@ fn options_default_and_validation() {
     assert_eq!(o.struct_size, std::mem::size_of::<toothfuse_options>());
     assert_eq!(o.preset, TOOTHFUSE_PRESET_DEFAULT);
     assert_eq!(o.frame, TOOTHFUSE_FRAME_CBCT);
+    assert_eq!(o.accept_questionable, 0);
     let s = Session::new();
     let (v, t) = cube(5.0, [0.0; 3]);
     s.add(TOOTHFUSE_MODALITY_CBCT, 11, &v, &t);
@@ -61,6 +63,13 @@ fn options_default_and_validation() {
                 ..toothfuse_options::default()
             },
             "options.frame 3",
+        ),
+        (
+            toothfuse_options {
+                accept_questionable: 2,
+                ..toothfuse_options::default()
+            },
+            "options.accept_questionable 2",
         ),
         (
             toothfuse_options {

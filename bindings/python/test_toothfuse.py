@@ -6,6 +6,11 @@ import unittest
 
 import toothfuse
 
+
+def ctypes_sizeof_options():
+    import ctypes
+    return ctypes.sizeof(toothfuse._Options)
+
 CUBE = [0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 0, 0, 2, 2, 0, 2, 2, 2, 2, 0, 2, 2]
 CUBE = [c + 0.1 for c in CUBE]
 TRIS = [0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
@@ -91,6 +96,24 @@ class BindingsTest(unittest.TestCase):
             self.assertIn("no CBCT tooth 21", str(e.exception))
             self.assertEqual(s.teeth(toothfuse.IOS), [11])
             self.assertEqual(s.teeth(toothfuse.CBCT), [])
+
+    def test_units_are_checked_on_entry(self):
+        with toothfuse.Session() as s:
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_tooth(toothfuse.CBCT, 21, [c * 0.001 for c in CUBE], TRIS)
+            self.assertEqual(e.exception.status, toothfuse.STATUS_UNIT_MISMATCH)
+            self.assertIn("CBCT", str(e.exception))
+            self.assertIn("metres", str(e.exception))
+            with self.assertRaises(toothfuse.ToothfuseError) as e:
+                s.add_jaw(toothfuse.IOS, [c * 1000 for c in CUBE], TRIS, [11] * 6 + [0] * 6,
+                          per_face=True)
+            self.assertEqual(e.exception.status, toothfuse.STATUS_UNIT_MISMATCH)
+            self.assertIn("micrometres", str(e.exception))
+            self.assertEqual(s.teeth(toothfuse.CBCT), [])
+            # The override reaches the library: an unknown value would be refused there.
+            o = toothfuse._options("default", "cbct", accept_questionable=True)
+            self.assertEqual(o.accept_questionable, 1)
+            self.assertEqual(o.struct_size, ctypes_sizeof_options())
 
     def test_ios_repair(self):
         with toothfuse.Session() as s:

@@ -195,6 +195,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   this->SkippedTeeth.clear();
   this->SkippedReasons.clear();
   this->ReportJSON.clear();
+  this->LastStatus = 0;
   vtkPolyData* iosIn = vtkPolyData::GetData(inputVector[0], 0);
   vtkPolyData* cbctIn = vtkPolyData::GetData(inputVector[1], 0);
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
@@ -204,6 +205,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   std::string err;
   if (!PrepareJaw(iosIn, this->IOSLabelArrayName, "IOS", ios, err) ||
       !PrepareJaw(cbctIn, this->CBCTLabelArrayName, "CBCT", cbct, err)) {
+    this->LastStatus = static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT);
     vtkErrorMacro(<< err);
     return 0;
   }
@@ -217,6 +219,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   }
   toothfuse_session* s = session.get();
   auto failed = [&](const char* call) {
+    this->LastStatus = static_cast<int>(st);
     vtkErrorMacro(<< call << " failed (" << toothfuse_status_string(st)
                   << "): " << toothfuse_session_last_error(s));
     return 0;
@@ -241,6 +244,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
     return failed("toothfuse_options_default");
   options.preset = static_cast<toothfuse_preset>(this->Preset);
   options.frame = static_cast<toothfuse_frame>(this->Frame);
+  options.accept_questionable = this->AcceptQuestionable ? 1u : 0u;
   if ((st = toothfuse_session_fuse(s, &options)) != TOOTHFUSE_STATUS_OK)
     return failed("toothfuse_session_fuse");
 
@@ -331,6 +335,8 @@ void vtkToothfuseFilter::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "Frame: " << (this->Frame == FRAME_IOS ? "IOS" : "CBCT") << "\n";
   os << indent << "IOSRepair: " << this->IOSRepair << " (MaxHoleFraction "
      << this->MaxHoleFraction << ")\n";
+  os << indent << "AcceptQuestionable: " << this->AcceptQuestionable << "\n";
+  os << indent << "LastStatus: " << this->LastStatus << "\n";
   os << indent << "FusedTeeth: " << this->FusedTeeth.size()
      << ", SkippedTeeth: " << this->SkippedTeeth.size() << "\n";
 }

@@ -74,6 +74,18 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   vtkSetClampMacro(MaxHoleFraction, double, 0.0, 1.0);
   vtkGetMacro(MaxHoleFraction, double);
 
+  /// Fuse even when toothfuse's registration gate finds the data questionable (mirrored,
+  /// another patient, shifted or misnumbered labels; off by default: such data fail the request
+  /// with TOOTHFUSE_STATUS_MIRRORED or TOOTHFUSE_STATUS_REGISTRATION_REJECTED, misnumbered teeth
+  /// are skipped). The findings are then in the report JSON under "questionable_findings".
+  vtkSetMacro(AcceptQuestionable, bool);
+  vtkGetMacro(AcceptQuestionable, bool);
+  vtkBooleanMacro(AcceptQuestionable, bool);
+
+  /// The toothfuse status of the last update (TOOTHFUSE_STATUS_OK = 0 after a success; e.g.
+  /// TOOTHFUSE_STATUS_UNIT_MISMATCH for input not in millimetres).
+  int GetLastStatus() const { return this->LastStatus; }
+
   /// After an update: the FDI numbers fused, the teeth skipped (with reasons) and the report
   /// JSON of the last successful run (empty after a failed one).
   const std::vector<int>& GetFusedTeeth() const { return this->FusedTeeth; }
@@ -95,6 +107,8 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   int Frame = FRAME_CBCT;
   bool IOSRepair = false;
   double MaxHoleFraction = 0.5;
+  bool AcceptQuestionable = false;
+  int LastStatus = 0;
 
   std::vector<int> FusedTeeth;
   std::vector<int> SkippedTeeth;

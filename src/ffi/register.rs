@@ -51,6 +51,12 @@ pub struct toothfuse_options {
     pub preset: toothfuse_preset,
     /// TOOTHFUSE_FRAME_CBCT (default) or TOOTHFUSE_FRAME_IOS.
     pub frame: toothfuse_frame,
+    /// 0 (default): data the registration gate finds questionable (mirrored, another patient,
+    /// shifted or misnumbered labels) are refused (TOOTHFUSE_STATUS_MIRRORED,
+    /// TOOTHFUSE_STATUS_REGISTRATION_REJECTED) or their teeth skipped; 1: registered anyway, the
+    /// findings then listed under `"questionable"` in the report JSON and as tooth warnings.
+    /// Appended after `frame`: a caller whose `struct_size` ends before it gets 0.
+    pub accept_questionable: u32,
 }
 
 impl Default for toothfuse_options {
@@ -59,12 +65,17 @@ impl Default for toothfuse_options {
             struct_size: size_of::<Self>(),
             preset: TOOTHFUSE_PRESET_DEFAULT,
             frame: TOOTHFUSE_FRAME_CBCT,
+            accept_questionable: 0,
         }
     }
 }
 
 /// Smallest `struct_size` accepted (the first ABI version of the struct: up to `frame`).
 const OPTIONS_MIN_SIZE: usize = offset_of!(toothfuse_options, frame) + size_of::<u32>();
+
+/// End of `accept_questionable` (the second ABI version of the struct).
+const OPTIONS_QUESTIONABLE_END: usize =
+    offset_of!(toothfuse_options, accept_questionable) + size_of::<u32>();
 
 /// Reads the caller's options (NULL = defaults) into pipeline options.
 ///
@@ -84,9 +95,22 @@ pub(crate) unsafe fn read_options(opts: *const toothfuse_options) -> FfiResult<P
                  bytes); fill the struct with toothfuse_options_default"
             )));
         }
-        // Every field of this version lies within OPTIONS_MIN_SIZE bytes.
-        // SAFETY: at least OPTIONS_MIN_SIZE readable bytes (struct_size checked above).
-        unsafe { *opts }
+        // The first layout's fields lie within OPTIONS_MIN_SIZE bytes; later fields are read
+        // only when the caller's struct_size covers them.
+        // SAFETY: at least OPTIONS_MIN_SIZE readable bytes (struct_size checked above), and
+        // each later field only when within the caller's struct_size.
+        unsafe {
+            toothfuse_options {
+                struct_size: size,
+                preset: std::ptr::addr_of!((*opts).preset).read(),
+                frame: std::ptr::addr_of!((*opts).frame).read(),
+                accept_questionable: if size >= OPTIONS_QUESTIONABLE_END {
+                    std::ptr::addr_of!((*opts).accept_questionable).read()
+                } else {
+                    0
+                },
+            }
+        }
     };
     let preset = match o.preset {
         TOOTHFUSE_PRESET_PAPER => Preset::Paper,
@@ -107,7 +131,18 @@ pub(crate) unsafe fn read_options(opts: *const toothfuse_options) -> FfiResult<P
             )));
         }
     };
-    Ok(PipelineOptions::preset(preset).with_frame(frame))
+    let accept_questionable = match o.accept_questionable {
+        0 => false,
+        1 => true,
+        v => {
+            return Err(Failure::invalid(format!(
+                "options.accept_questionable {v} is neither 0 nor 1"
+            )));
+        }
+    };
+    let mut p = PipelineOptions::preset(preset).with_frame(frame);
+    p.register.accept_questionable = accept_questionable;
+    Ok(p)
 }
 
 /// Writes the default options (preset DEFAULT, frame CBCT, `struct_size` set) to `*options_out`.

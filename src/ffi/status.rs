@@ -42,6 +42,13 @@ pub enum toothfuse_status {
     Panic = 12,
     /// The session was poisoned by an earlier panic; free it and start a new one.
     Poisoned = 13,
+    /// One modality is a mirror image of the other (x -> -x, or an LPS/RAS conversion applied to
+    /// one modality only); the message names the evidence. Nothing was registered.
+    Mirrored = 14,
+    /// The registration gate refused the data: the IOS and the CBCT do not belong together
+    /// (another patient, the other jaw, tooth numbers shifted along the arch); the message names
+    /// the likely cause. Set `accept_questionable` in the options to register anyway.
+    RegistrationRejected = 15,
 }
 
 impl From<ErrorKind> for toothfuse_status {
@@ -56,13 +63,15 @@ impl From<ErrorKind> for toothfuse_status {
             ErrorKind::DidNotConverge => Self::DidNotConverge,
             ErrorKind::Io => Self::Io,
             ErrorKind::WrongState => Self::WrongState,
+            ErrorKind::Mirrored => Self::Mirrored,
+            ErrorKind::RegistrationRejected => Self::RegistrationRejected,
         }
     }
 }
 
 impl toothfuse_status {
     /// Every status, in numeric order.
-    pub(crate) const ALL: [toothfuse_status; 14] = [
+    pub(crate) const ALL: [toothfuse_status; 16] = [
         Self::Ok,
         Self::NullParameter,
         Self::InvalidArgument,
@@ -77,6 +86,8 @@ impl toothfuse_status {
         Self::Io,
         Self::Panic,
         Self::Poisoned,
+        Self::Mirrored,
+        Self::RegistrationRejected,
     ];
 
     /// The status with numeric value `v`, if any.
@@ -101,6 +112,10 @@ impl toothfuse_status {
             Self::Io => "file input/output error\0",
             Self::Panic => "internal error (panic caught); the session is poisoned\0",
             Self::Poisoned => "session poisoned by an earlier internal error; free it\0",
+            Self::Mirrored => "one modality is a mirror image of the other\0",
+            Self::RegistrationRejected => {
+                "registration rejected: the IOS and the CBCT do not belong together\0"
+            }
         }
     }
 }
@@ -127,7 +142,7 @@ mod tests {
             let m = s.message();
             assert!(m.ends_with('\0') && m.len() > 2 && !m[..m.len() - 1].contains('\0'));
         }
-        assert_eq!(toothfuse_status::from_u32(14), None);
+        assert_eq!(toothfuse_status::from_u32(16), None);
         assert_eq!(
             toothfuse_status::from(ErrorKind::NotManifold),
             toothfuse_status::NotManifold

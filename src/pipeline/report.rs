@@ -41,6 +41,11 @@ pub struct PipelineReport {
     pub timing_ms: BTreeMap<String, f64>,
     /// How to read `timing_ms`.
     pub timing_note: String,
+    /// Whether the result was accepted although the registration gate found the data
+    /// questionable (only with `accept_questionable`).
+    pub questionable: bool,
+    /// The gate's findings accepted with `accept_questionable` (empty otherwise).
+    pub questionable_findings: Vec<String>,
 }
 
 impl PipelineResult {
@@ -93,6 +98,8 @@ impl PipelineResult {
             timing_note: "wall time of each stage; fuse = cut + stitch; within a stage the teeth \
                           are processed in parallel"
                 .into(),
+            questionable: reg.questionable,
+            questionable_findings: reg.questionable_findings,
         }
     }
 

@@ -13,10 +13,12 @@ mod coarse;
 pub mod correspondence;
 mod drift;
 mod fine;
+pub mod gate;
 pub mod icp;
 mod options;
 mod report;
 
+pub use gate::{GateReport, ToothEvidence};
 pub use icp::{Convergence, RobustKernel, WeightOptions};
 pub use options::{
     CentroidMode, Correspondence, DriftOptions, FineMode, GuardOptions, OutputFrame, Preset,
@@ -88,6 +90,8 @@ pub struct Skipped {
 pub struct Timing {
     /// Index building and input checks.
     pub prepare_ms: f64,
+    /// The registration gate ([`gate`]).
+    pub gate_ms: f64,
     /// Centroid alignment.
     pub centroid_ms: f64,
     /// Coarse registration.
@@ -118,6 +122,9 @@ pub struct Registration {
     /// Jaw-level SD: mean over the measured IOS points of every tooth (at most
     /// [`RegisterOptions::report_points`] per tooth) of the distance to their CBCT tooth.
     pub sd_mm: f64,
+    /// What the registration gate measured, and the findings accepted when
+    /// [`RegisterOptions::accept_questionable`] is set (then [`Registration::questionable`]).
+    pub gate: GateReport,
     /// Timing.
     pub timing: Timing,
 }
@@ -311,6 +318,7 @@ pub fn register(
     for f in ios.keys().chain(cbct.keys()) {
         crate::arch::check_fdi(*f as i32)?;
     }
+    crate::units::check_jaw_scales(ios, cbct)?;
     let mut all_fdi: Vec<u8> = ios.keys().chain(cbct.keys()).copied().collect();
     all_fdi.sort_unstable();
     all_fdi.dedup();
@@ -328,6 +336,14 @@ pub fn register(
             }),
         }
     }
+    if both.is_empty()
+        && let Some(e) = gate::wrong_jaw(
+            &ios.keys().copied().collect::<Vec<_>>(),
+            &cbct.keys().copied().collect::<Vec<_>>(),
+        )
+    {
+        return Err(e);
+    }
     // Per-tooth preparation on several threads; the first error in FDI order is returned, as
     // a sequential loop would.
     let mut teeth = BTreeMap::new();
@@ -336,8 +352,11 @@ pub fn register(
     })) {
         teeth.insert(*f, d?);
     }
-    let order = crate::arch::arch_order(&teeth.keys().copied().collect::<Vec<_>>());
     timing.prepare_ms = ms(t0);
+    let tg = Instant::now();
+    let (gate_report, gate_warnings) = run_gate(&mut teeth, &mut skipped, opts)?;
+    timing.gate_ms = ms(tg);
+    let order = crate::arch::arch_order(&teeth.keys().copied().collect::<Vec<_>>());
 
     // Stage 1: centroid alignment, eq. (1) (or the caller's transform).
     let t1 = Instant::now();
@@ -424,7 +443,7 @@ pub fn register(
     // mean SD is summed in arch order afterwards, as before.
     let per_tooth = crate::par::map_ordered(&order, |f| {
         let d = &teeth[f];
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<String> = gate_warnings.get(f).cloned().into_iter().collect();
         let mut m = ios_to_cbct[f];
         let correction = |m: &Rigid| {
             let fine_c2i = m.inverse();
@@ -547,8 +566,57 @@ pub fn register(
         coarse: coarse_t,
         cbct_offset_mm: offset,
         sd_mm: sd_sum / sd_n.max(1) as f64,
+        gate: gate_report,
         timing,
     })
+}
+
+/// Runs the registration gate on the prepared teeth (three or more): a jaw-level finding is
+/// returned as the error, misnumbered teeth move from `teeth` to `skipped`; with
+/// [`RegisterOptions::accept_questionable`] both are kept as findings of the report and warnings of
+/// the teeth instead.
+fn run_gate(
+    teeth: &mut BTreeMap<u8, ToothData>,
+    skipped: &mut Vec<Skipped>,
+    opts: &RegisterOptions,
+) -> Result<(GateReport, BTreeMap<u8, String>)> {
+    let mut warnings = BTreeMap::new();
+    if teeth.len() < 3 {
+        return Ok((GateReport::default(), warnings));
+    }
+    let v = gate::assess(teeth);
+    let mut report = v.report;
+    if let Some(e) = v.jaw {
+        if !opts.accept_questionable {
+            return Err(e);
+        }
+        report
+            .accepted
+            .push(format!("{e} (accepted as questionable)"));
+    }
+    for (f, why) in v.skip {
+        if opts.accept_questionable {
+            report
+                .accepted
+                .push(format!("tooth {f}: {why} (accepted as questionable)"));
+            warnings.insert(f, format!("{why} (accepted as questionable)"));
+        } else {
+            teeth.remove(&f);
+            skipped.push(Skipped {
+                fdi: f,
+                reason: why,
+            });
+        }
+    }
+    skipped.sort_by_key(|s| s.fdi);
+    Ok((report, warnings))
+}
+
+impl Registration {
+    /// Whether the result was accepted although the gate found the data questionable.
+    pub fn questionable(&self) -> bool {
+        !self.gate.accepted.is_empty()
+    }
 }
 
 /// Signed gap (mm) between the occlusal tops of the IOS crown (mapped by `ios_to_cbct`) and the

@@ -203,6 +203,10 @@ pub struct RegisterOptions {
     pub report_points: usize,
     /// Plausibility checks.
     pub guard: GuardOptions,
+    /// Register even when the gate ([`crate::register::gate`]) finds the data questionable
+    /// (mirrored, another patient, shifted or misnumbered labels): its findings then go into the
+    /// result ([`crate::register::Registration::questionable`]) instead of an error. Off by default.
+    pub accept_questionable: bool,
 }
 
 impl RegisterOptions {
@@ -234,6 +238,7 @@ impl RegisterOptions {
                 min_inlier_fraction: 0.8,
                 max_top_gap_mm: 0.5,
             },
+            accept_questionable: false,
         }
     }
 
@@ -381,6 +386,7 @@ impl Default for RegisterOptions {
                 min_inlier_fraction: 0.8,
                 max_top_gap_mm: 0.5,
             },
+            accept_questionable: false,
         }
     }
 }

@@ -52,6 +52,13 @@ pub struct Report {
     pub sd_mm: f64,
     /// Stage timings (ms), keyed by stage name.
     pub timing_ms: BTreeMap<String, f64>,
+    /// Whether the registration was accepted although the gate found the data questionable
+    /// (only with `accept_questionable`).
+    #[serde(default)]
+    pub questionable: bool,
+    /// The gate's findings accepted with `accept_questionable` (empty otherwise).
+    #[serde(default)]
+    pub questionable_findings: Vec<String>,
 }
 
 impl Registration {
@@ -60,6 +67,7 @@ impl Registration {
         let t = &self.timing;
         let timing_ms = [
             ("prepare", t.prepare_ms),
+            ("gate", t.gate_ms),
             ("centroid", t.centroid_ms),
             ("coarse", t.coarse_ms),
             ("fine", t.fine_ms),
@@ -96,6 +104,8 @@ impl Registration {
                 .collect(),
             sd_mm: self.sd_mm,
             timing_ms,
+            questionable: self.questionable(),
+            questionable_findings: self.gate.accepted.clone(),
         }
     }
 

@@ -4,6 +4,22 @@
 use super::*;
 use glam::DVec3;
 
+/// [`super::register`] accepting questionable data: the hand-made jaw is identical teeth on a
+/// circular arc, so its labels are ambiguous by construction (a shift along the arc, or a
+/// reflection, fits about as well) and the gate would refuse it; these tests check the
+/// optimiser, and `wrong_data.rs` the gate on realistic jaws.
+fn register(
+    ios: &BTreeMap<u8, TriMesh>,
+    cbct: &BTreeMap<u8, TriMesh>,
+    opts: &RegisterOptions,
+) -> Result<Registration> {
+    let opts = RegisterOptions {
+        accept_questionable: true,
+        ..opts.clone()
+    };
+    super::register(ios, cbct, &opts)
+}
+
 /// A closed tooth: crown of height `hc` above z = 0 with three cusps, root of length `hr` below.
 fn tooth(nu: usize, nv: usize, a: f64, b: f64, hc: f64, hr: f64, inflate: f64) -> TriMesh {
     let mut p = vec![DVec3::new(0.0, 0.0, hc + inflate)];

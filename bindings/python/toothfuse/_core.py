@@ -29,13 +29,17 @@ import os
 
 __all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "merge_meshes", "is_fdi", "IOS",
            "CBCT", "version",
-           "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT"]
+           "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT", "STATUS_UNIT_MISMATCH",
+           "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED"]
 
 IOS = 0
 CBCT = 1
 SOURCE_IOS = 0
 SOURCE_BAND = 1
 SOURCE_CBCT = 2
+STATUS_UNIT_MISMATCH = 6
+STATUS_MIRRORED = 14
+STATUS_REGISTRATION_REJECTED = 15
 _PRESETS = {"paper": 0, "default": 1}
 _FRAMES = {"cbct": 0, "ios": 1}
 _TRANSFORMS = {"cbct_to_output": 0, "ios_to_output": 1, "cbct_to_ios": 2}
@@ -88,7 +92,7 @@ class _MeshInfo(ctypes.Structure):
 
 class _Options(ctypes.Structure):
     _fields_ = [("struct_size", ctypes.c_size_t), ("preset", ctypes.c_uint32),
-                ("frame", ctypes.c_uint32)]
+                ("frame", ctypes.c_uint32), ("accept_questionable", ctypes.c_uint32)]
 
 
 class _ToothReport(ctypes.Structure):
@@ -420,16 +424,17 @@ class Session:
 
     # --- registration and fusion ---------------------------------------------------------------
 
-    def register(self, preset="default", frame="cbct"):
+    def register(self, preset="default", frame="cbct", accept_questionable=False):
         """Registers the held CBCT teeth to the held IOS crowns; returns the registered FDI
         numbers. preset: "default" or "paper"; frame: "cbct" or "ios" (the output frame)."""
-        self._check(_register(self._h, ctypes.byref(_options(preset, frame))))
+        self._check(_register(self._h, ctypes.byref(
+            _options(preset, frame, accept_questionable))))
         return self._fdi_list(_registered)
 
-    def fuse(self, preset="default", frame="cbct"):
+    def fuse(self, preset="default", frame="cbct", accept_questionable=False):
         """Register + cut + stitch in one call (registers anew); returns the fused FDI numbers.
         Teeth whose fusion failed are listed by `skipped()`."""
-        self._check(_fuse(self._h, ctypes.byref(_options(preset, frame))))
+        self._check(_fuse(self._h, ctypes.byref(_options(preset, frame, accept_questionable))))
         return self._fdi_list(_fused_teeth)
 
     def fuse_registered(self, preset="default"):
@@ -568,7 +573,7 @@ class Session:
         return d
 
 
-def _options(preset, frame):
+def _options(preset, frame, accept_questionable=False):
     o = _Options()
     st = _opts_default(ctypes.byref(o))
     if st != _OK:
@@ -578,6 +583,7 @@ def _options(preset, frame):
     if frame not in _FRAMES:
         raise ValueError(f"unknown frame {frame!r}; one of {sorted(_FRAMES)}")
     o.preset, o.frame = _PRESETS[preset], _FRAMES[frame]
+    o.accept_questionable = 1 if accept_questionable else 0
     return o
 
 
@@ -632,7 +638,8 @@ class FusedJaw:
     sources: per-vertex SOURCE_IOS, SOURCE_BAND or SOURCE_CBCT (array('B') / uint8); teeth: the
     fused FDI numbers; skipped: [(fdi, reason)]; quality: {fdi: dict}; transforms: {fdi:
     {"cbct_to_output": [16], "ios_to_output": [16], "cbct_to_ios": [16]}}; report: the
-    report.json dict; frame: "cbct" or "ios"."""
+    report.json dict; frame: "cbct" or "ios"; questionable: True when the registration gate
+    found the data questionable and `accept_questionable` let it through."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -644,22 +651,27 @@ class FusedJaw:
 
 def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles, cbct_labels,
          *, ios_per_face=False, cbct_per_face=False, preset="default", frame="cbct",
-         ios_repair=False, max_hole_fraction=0.5, as_numpy=None):
+         ios_repair=False, max_hole_fraction=0.5, as_numpy=None, accept_questionable=False):
     """One call: a labeled IOS jaw (FDI per vertex, or per face with ios_per_face; 0 =
     gingiva) and labeled CBCT teeth (one mesh with FDI labels; every tooth closed) -> FusedJaw.
     ios_repair repairs real-scan crowns on entry. Results are numpy arrays when as_numpy is
     True, or when it is None and numpy is installed and the IOS vertices are a numpy array.
-    Raises ToothfuseError with the library's message (naming the tooth at fault)."""
+    Raises ToothfuseError with the library's message (naming the tooth at fault): status
+    STATUS_UNIT_MISMATCH for wrong units, STATUS_MIRRORED for a mirrored modality,
+    STATUS_REGISTRATION_REJECTED for data that do not belong together (another patient, the other
+    jaw, shifted labels). accept_questionable=True registers such data anyway; the result's
+    `questionable` is then True and report["questionable_findings"] names the findings."""
     with Session() as s:
         if ios_repair:
             s.set_ios_repair(True, max_hole_fraction)
         s.add_jaw(IOS, ios_vertices, ios_triangles, ios_labels, per_face=ios_per_face)
         s.add_jaw(CBCT, cbct_vertices, cbct_triangles, cbct_labels, per_face=cbct_per_face)
-        teeth = s.fuse(preset=preset, frame=frame)
+        teeth = s.fuse(preset=preset, frame=frame, accept_questionable=accept_questionable)
         pos, idx, src, labels = s.fused_mesh(0)
         jaw = FusedJaw(
             positions=pos, triangles=idx, labels=labels, sources=src, teeth=teeth,
             skipped=s.skipped(), frame=frame, report=s.report(),
+            questionable=bool(s.report().get("questionable", False)),
             quality={f: s.fused_quality(f) for f in teeth},
             transforms={f: {w: s.transform(f, w) for w in _TRANSFORMS} for f in teeth})
     if as_numpy is None:

@@ -42,6 +42,9 @@ pub fn run(a: &FuseArgs) -> Result<()> {
     for s in &rep.skipped {
         println!("skipped tooth {}: {}", s.fdi, s.reason);
     }
+    for q in &rep.questionable_findings {
+        println!("warning: questionable data accepted: {q}");
+    }
     println!(
         "fused {} teeth ({} watertight, {} skipped) into {}; register {:.1} ms, cut {:.1} ms, stitch {:.1} ms, total {:.1} ms",
         rep.teeth.len(),

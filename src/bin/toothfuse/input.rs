@@ -47,6 +47,11 @@ pub struct InputArgs {
     /// Method preset: paper (faithful) or default (measured better).
     #[arg(long, default_value = "default", value_parser = ["paper", "default"])]
     pub preset: String,
+    /// Register and fuse even when the registration gate finds the data questionable (mirrored,
+    /// another patient, shifted or misnumbered labels); the findings are then listed under
+    /// "questionable" in report.json and as warnings.
+    #[arg(long)]
+    pub accept_questionable: bool,
 }
 
 /// The IOS input: a labeled jaw or per-tooth crowns.
@@ -67,7 +72,9 @@ impl InputArgs {
     pub fn options(&self) -> PipelineOptions {
         let p = Preset::from_name(&self.preset).unwrap_or_default();
         let f = OutputFrame::from_name(&self.frame).unwrap_or_default();
-        PipelineOptions::preset(p).with_frame(f)
+        let mut o = PipelineOptions::preset(p).with_frame(f);
+        o.register.accept_questionable = self.accept_questionable;
+        o
     }
 
     /// Both inputs, or `None` for the synthetic jaw.

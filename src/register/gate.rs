@@ -1,0 +1,562 @@
+//! The registration gate: evidence, independent of the optimiser's own residuals, that the IOS
+//! and the CBCT show the same jaw of the same patient with the same tooth numbers. It runs after
+//! the per-tooth preparation and before the coarse stage, so wrong data are refused in a fraction
+//! of a second instead of after a long registration that cannot succeed.
+//!
+//! A quick jaw-wide fit ([`quick_fit`]: centroid alignment, then a trimmed point-to-plane ICP on
+//! at most 150 IOS points per tooth) is run under competing hypotheses:
+//!
+//! * the data as given;
+//! * the IOS mirrored (x → −x): when it fits clearly better, one modality is a reflection of the
+//!   other ([`Error::Mirrored`]);
+//! * the IOS labels moved by one tooth along the arch, either way: when that fits clearly better,
+//!   the labels are shifted ([`Error::RegistrationRejected`]).
+//!
+//! With the given labels, each IOS crown is then compared with its own CBCT tooth and with the
+//! CBCT teeth near it along the arch: a crown that lies on another tooth's CBCT surface is
+//! misnumbered (two such crowns on each other's teeth: swapped) and is skipped with that reason.
+//! Per tooth, an independent rigid fit from the jaw-wide fit measures how far each tooth must move
+//! on its own ([`ToothEvidence::own_shift_mm`]): for the same patient only the scanner's smooth
+//! drift and the CBCT's distortion; for another patient's arch, the teeth's individual positions
+//! differ. The jaw is refused when the median fit or the tooth motions are beyond what the same
+//! patient gives.
+
+use super::ToothData;
+use super::centroid::kabsch;
+use super::correspondence::SurfaceIndex;
+use super::icp::{Normal7, Pair, step_about};
+use crate::arch::{arch_position, is_valid_fdi, jaw_of};
+use crate::{Error, Rigid};
+use glam::DVec3;
+use std::collections::BTreeMap;
+
+/// Largest number of IOS points per tooth the gate's fits use (deterministic stride sample).
+const SAMPLE: usize = 150;
+/// ICP iterations of the quick jaw-wide fit.
+const JAW_ITERATIONS: usize = 25;
+/// ICP iterations of the independent per-tooth fit.
+const TOOTH_ITERATIONS: usize = 20;
+/// Largest number of IOS points per tooth of the independent per-tooth fit.
+const TOOTH_SAMPLE: usize = 500;
+/// An alternative hypothesis wins when its median fit is below this fraction of the given one's.
+const BETTER: f64 = 0.6;
+/// The reflected IOS wins when its median fit is below this fraction of the given one's (a valid
+/// jaw's reflection fits about half as well, a mirrored jaw's about twice as well: 0.5-0.6
+/// measured on the phantoms either way).
+const MIRROR_BETTER: f64 = 0.75;
+/// A hypothesis wins only with a median fit below this (mm): a clear fit.
+const CLEAR_FIT_MM: f64 = 0.35;
+/// Fewest teeth in both modalities for the "does not match" verdict.
+const MIN_TEETH_FOR_MISMATCH: usize = 6;
+/// Median per-tooth fit (mm) under which the given data are never said to fit worse than an
+/// alternative: a fit this good is the right one whatever an alternative gives.
+const GOOD_FIT_MM: f64 = 0.2;
+/// Median per-tooth fit (mm) of the given data above which the jaw is refused.
+const MAX_JAW_FIT_MM: f64 = 0.6;
+/// Typical median fit (mm) of the quick jaw-wide fit on the same patient's scans.
+const FIT_REF_MM: f64 = 0.17;
+/// Typical median per-tooth translation (mm) of the independent fit on the same patient's scans.
+const TRANSLATION_REF_MM: f64 = 0.25;
+/// Mismatch score above which the jaw is refused as another patient's.
+const MAX_MISMATCH: f64 = 2.2;
+/// A crown whose fit to its own CBCT tooth is worse than this (mm) and at most [`BETTER`] times
+/// that on another tooth's CBCT is misnumbered.
+const TOOTH_MISFIT_MM: f64 = 1.0;
+
+/// What the gate measured on one tooth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ToothEvidence {
+    /// FDI number.
+    pub fdi: u8,
+    /// Median distance (mm) of its IOS sample to its own CBCT tooth after the jaw-wide fit.
+    pub own_fit_mm: f64,
+    /// The CBCT tooth (other than its own) its IOS crown fits best, with that median distance.
+    pub best_other: Option<(u8, f64)>,
+    /// How far (mm, at the crown) an independent rigid fit of this tooth moves it from the
+    /// jaw-wide fit.
+    pub own_shift_mm: f64,
+    /// The part of that motion at the crown centre across the tooth's axis (mm).
+    pub own_lateral_mm: f64,
+    /// Median distance (mm) of its IOS sample to its own CBCT tooth after that independent fit.
+    pub own_refit_mm: f64,
+    /// That motion as the displacement of three points 5 mm apart around the crown centre
+    /// (CBCT frame, mm), for comparing neighbours.
+    pub own_motion: [DVec3; 3],
+}
+
+/// What the gate measured on the jaw; kept on the registration.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GateReport {
+    /// Median over teeth of the per-tooth median distance (mm) after the quick fit, as given.
+    pub fit_mm: f64,
+    /// The same with the IOS mirrored.
+    pub mirrored_fit_mm: f64,
+    /// The same with the IOS labels moved by one tooth along the arch (the better direction).
+    pub shifted_fit_mm: f64,
+    /// Median over teeth of [`ToothEvidence::own_shift_mm`].
+    pub tooth_shift_mm: f64,
+    /// Median over teeth of [`ToothEvidence::own_refit_mm`].
+    pub refit_mm: f64,
+    /// Median over teeth of how far the independent per-tooth fit moves the crown centre across
+    /// the tooth's axis (mm).
+    pub tooth_translation_mm: f64,
+    /// The mismatch score: `fit_mm / FIT_REF_MM + tooth_translation_mm / TRANSLATION_REF_MM`
+    /// (1.0-1.9 measured on the same patient's phantom scans, 2.1-4.7 on another patient's; the
+    /// jaw is refused above 2.0).
+    pub mismatch: f64,
+    /// Median over teeth of how far a tooth's own motion departs from the mean of its two
+    /// neighbours' along the arch (mm): smooth drift moves neighbours alike.
+    pub roughness_mm: f64,
+    /// Handedness of the IOS from its own geometry and FDI sides: `Some(true)` when it agrees
+    /// with the numbering, `Some(false)` when mirrored, `None` when undecidable.
+    pub ios_handed_ok: Option<bool>,
+    /// Per tooth.
+    pub teeth: Vec<ToothEvidence>,
+    /// Findings accepted because the caller asked to accept questionable data (empty otherwise).
+    pub accepted: Vec<String>,
+}
+
+/// The gate's verdict on the jaw and the teeth to leave out.
+pub(crate) struct Verdict {
+    pub report: GateReport,
+    /// Jaw-level refusal (mirrored or rejected), if any.
+    pub jaw: Option<Error>,
+    /// Teeth to skip, with the reason.
+    pub skip: Vec<(u8, String)>,
+}
+
+/// One tooth as a hypothesis pairs it: the CBCT surface and the IOS sample.
+struct Pairing<'a> {
+    fdi: u8,
+    cbct: &'a SurfaceIndex,
+    ios: Vec<DVec3>,
+}
+
+fn sample(d: &ToothData, n: usize) -> Vec<DVec3> {
+    let all = d.ios_indices(super::Level::Full);
+    let stride = all.len().div_ceil(n).max(1);
+    all.iter()
+        .step_by(stride)
+        .map(|&k| d.ios_points[k])
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::INFINITY;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn mean(p: &[DVec3]) -> DVec3 {
+    p.iter().copied().sum::<DVec3>() / p.len().max(1) as f64
+}
+
+/// Median distance (mm) of `pts`, mapped by `ios_to_cbct`, to `cbct`.
+fn fit_of(cbct: &SurfaceIndex, pts: &[DVec3], ios_to_cbct: &Rigid) -> f64 {
+    median(
+        pts.iter()
+            .map(|p| cbct.closest_point(ios_to_cbct.apply(*p)).distance)
+            .collect(),
+    )
+}
+
+/// Trimmed point-to-plane ICP (closest CBCT vertex, its normal) moving the IOS samples of
+/// `teeth` onto their CBCT teeth from `ios_to_cbct`; returns the final IOS → CBCT transform.
+fn icp(teeth: &[&Pairing], mut ios_to_cbct: Rigid, iterations: usize) -> Rigid {
+    let all: Vec<DVec3> = teeth.iter().flat_map(|t| t.ios.iter().copied()).collect();
+    if all.is_empty() {
+        return ios_to_cbct;
+    }
+    let c0 = mean(&all);
+    for _ in 0..iterations {
+        let center = ios_to_cbct.apply(c0);
+        let per_tooth = crate::par::map_ordered(teeth, |t| {
+            t.ios
+                .iter()
+                .map(|p| {
+                    let q = ios_to_cbct.apply(*p);
+                    let c = t.cbct.closest_vertex(q);
+                    Pair {
+                        p: q,
+                        q: c.point,
+                        n: c.normal,
+                        n_other: DVec3::ZERO,
+                    }
+                })
+                .collect::<Vec<_>>()
+        });
+        let pairs = per_tooth.concat();
+        let cut = 3.0 * median(pairs.iter().map(|p| p.p.distance(p.q)).collect()) + 0.3;
+        let w: Vec<f64> = pairs
+            .iter()
+            .map(|p| if p.p.distance(p.q) <= cut { 1.0 } else { 0.0 })
+            .collect();
+        let mut ne = Normal7::new();
+        ne.add_pairs(&pairs, &w, center, 0.0);
+        let Some((rw, rt, _)) = ne.solve(false) else {
+            break;
+        };
+        ios_to_cbct = step_about(rw, rt, center)
+            .compose(&ios_to_cbct)
+            .orthonormalized();
+        if rw.length() < 1e-5 && rt.length() < 1e-4 {
+            break;
+        }
+    }
+    ios_to_cbct
+}
+
+/// Centroid alignment (IOS sample centroid onto CBCT vertex centroid, keyed by tooth) then the
+/// trimmed ICP: the IOS → CBCT transform and the median over teeth of each tooth's median
+/// distance. `None` when the centroids are degenerate.
+fn quick_fit(teeth: &[Pairing]) -> Option<(Rigid, f64)> {
+    let src: Vec<DVec3> = teeth.iter().map(|t| mean(&t.ios)).collect();
+    let mut dst: Vec<DVec3> = teeth
+        .iter()
+        .map(|t| mean(&t.cbct.mesh().positions))
+        .collect();
+    let mut init = kabsch(&src, &dst, None).ok()?;
+    // The IOS holds crowns only: pair each crown centroid with the centroid of the CBCT
+    // vertices near the mapped crown instead of the whole tooth's (two passes).
+    for _ in 0..2 {
+        dst = teeth
+            .iter()
+            .zip(&dst)
+            .map(|(t, &d)| {
+                let crown: Vec<DVec3> = t.ios.iter().map(|p| init.apply(*p)).collect();
+                let near: Vec<DVec3> = t
+                    .cbct
+                    .mesh()
+                    .positions
+                    .iter()
+                    .copied()
+                    .filter(|v| crown.iter().any(|c| c.distance_squared(*v) < 4.0))
+                    .collect();
+                if near.is_empty() { d } else { mean(&near) }
+            })
+            .collect();
+        init = kabsch(&src, &dst, None).ok()?;
+    }
+    let refs: Vec<&Pairing> = teeth.iter().collect();
+    let t = icp(&refs, init, JAW_ITERATIONS);
+    let fit = median(teeth.iter().map(|p| fit_of(p.cbct, &p.ios, &t)).collect());
+    Some((t, fit))
+}
+
+/// The FDI number `steps` teeth along the arch from `fdi` within its jaw (permanent teeth
+/// 18 … 11, 21 … 28 or 48 … 41, 31 … 38), `None` past the end.
+fn along_arch(fdi: u8, steps: i32) -> Option<u8> {
+    let jaw_teeth: Vec<u8> = match jaw_of(fdi) {
+        crate::arch::Jaw::Upper => [10u8, 20]
+            .iter()
+            .flat_map(|q| (1..=8).map(move |t| q + t))
+            .collect(),
+        crate::arch::Jaw::Lower => [40u8, 30]
+            .iter()
+            .flat_map(|q| (1..=8).map(move |t| q + t))
+            .collect(),
+    };
+    let mut order = jaw_teeth;
+    order.sort_by_key(|&t| arch_position(t));
+    let i = order.iter().position(|&t| t == fdi)? as i32 + steps;
+    usize::try_from(i).ok().and_then(|i| order.get(i).copied())
+}
+
+/// The verdict on `teeth` (the teeth in both modalities, prepared).
+pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
+    let samples: BTreeMap<u8, Vec<DVec3>> =
+        teeth.iter().map(|(&f, d)| (f, sample(d, SAMPLE))).collect();
+    let given: Vec<Pairing> = teeth
+        .iter()
+        .map(|(&f, d)| Pairing {
+            fdi: f,
+            cbct: &d.cbct,
+            ios: samples[&f].clone(),
+        })
+        .collect();
+    let mut report = GateReport::default();
+    let Some((t, fit)) = quick_fit(&given) else {
+        return Verdict {
+            report,
+            jaw: None,
+            skip: Vec::new(),
+        };
+    };
+    report.fit_mm = fit;
+    let mirrored: Vec<Pairing> = given
+        .iter()
+        .map(|p| Pairing {
+            fdi: p.fdi,
+            cbct: p.cbct,
+            ios: p.ios.iter().map(|v| DVec3::new(-v.x, v.y, v.z)).collect(),
+        })
+        .collect();
+    report.mirrored_fit_mm = quick_fit(&mirrored).map_or(f64::INFINITY, |r| r.1);
+    let mut shifted_best = (f64::INFINITY, 0);
+    for step in [-1, 1] {
+        let moved: Vec<Pairing> = given
+            .iter()
+            .filter_map(|p| {
+                let to = along_arch(p.fdi, step).filter(|&f| is_valid_fdi(f as i32))?;
+                Some(Pairing {
+                    fdi: to,
+                    cbct: &teeth.get(&to)?.cbct,
+                    ios: p.ios.clone(),
+                })
+            })
+            .collect();
+        if moved.len() >= 3
+            && let Some((_, f)) = quick_fit(&moved)
+            && f < shifted_best.0
+        {
+            shifted_best = (f, step);
+        }
+    }
+    report.shifted_fit_mm = shifted_best.0;
+    report.teeth = tooth_evidence(teeth, &given, &t);
+    report.tooth_shift_mm = median(report.teeth.iter().map(|e| e.own_shift_mm).collect());
+    report.roughness_mm = roughness(&report.teeth);
+    report.refit_mm = median(report.teeth.iter().map(|e| e.own_refit_mm).collect());
+    report.tooth_translation_mm = median(
+        report
+            .teeth
+            .iter()
+            .filter(|e| e.own_fit_mm <= TOOTH_MISFIT_MM)
+            .map(|e| e.own_lateral_mm)
+            .collect(),
+    );
+    report.mismatch = report.fit_mm / FIT_REF_MM + report.tooth_translation_mm / TRANSLATION_REF_MM;
+    report.ios_handed_ok = ios_handedness(teeth);
+    let jaw = jaw_verdict(&report, shifted_best.1);
+    let skip = if jaw.is_some() || report.fit_mm > CLEAR_FIT_MM {
+        Vec::new()
+    } else {
+        misnumbered(&report)
+    };
+    Verdict { report, jaw, skip }
+}
+
+/// Per tooth: its own fit, its best fit on another CBCT tooth nearby, its independent motion.
+fn tooth_evidence(
+    teeth: &BTreeMap<u8, ToothData>,
+    given: &[Pairing],
+    t: &Rigid,
+) -> Vec<ToothEvidence> {
+    crate::par::map_ordered(given, |p| {
+        let own_fit_mm = fit_of(p.cbct, &p.ios, t);
+        let dense = Pairing {
+            fdi: p.fdi,
+            cbct: p.cbct,
+            ios: sample(&teeth[&p.fdi], TOOTH_SAMPLE),
+        };
+        let best_other = (-2..=2)
+            .filter(|&s| s != 0)
+            .filter_map(|s| along_arch(p.fdi, s))
+            .filter_map(|f| Some((f, fit_of(&teeth.get(&f)?.cbct, &p.ios, t))))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let own = icp(&[&dense], *t, TOOTH_ITERATIONS);
+        let c = mean(&p.ios);
+        let own_motion = [DVec3::ZERO, DVec3::X * 5.0, DVec3::Y * 5.0]
+            .map(|o| own.apply(c + o) - t.apply(c + o));
+        let own_shift_mm = own_motion.iter().map(|v| v.length()).fold(0.0, f64::max);
+        let own_refit_mm = fit_of(p.cbct, &dense.ios, &own);
+        // The CBCT segmentation's threshold bias moves a crown along its axis; only the motion
+        // across the axis tells a different arch.
+        let up = t
+            .apply_vector(occlusal(&teeth[&p.fdi]).unwrap_or(DVec3::ZERO))
+            .normalize_or_zero();
+        let v = own_motion[0];
+        let own_lateral_mm = (v - up * v.dot(up)).length();
+        ToothEvidence {
+            own_lateral_mm,
+            own_refit_mm,
+            fdi: p.fdi,
+            own_fit_mm,
+            best_other,
+            own_shift_mm,
+            own_motion,
+        }
+    })
+}
+
+fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
+    // A short arch's nearly collinear teeth leave the quick fit's rotation about the arch line
+    // loose (the full registration restarts for that): its verdicts need a hypothesis that fits
+    // well, and the "does not match" verdict needs a long enough arch.
+    let long_arch = r.teeth.len() >= MIN_TEETH_FOR_MISMATCH;
+    if r.fit_mm > GOOD_FIT_MM
+        && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm
+        && r.mirrored_fit_mm < CLEAR_FIT_MM
+    {
+        let which = match r.ios_handed_ok {
+            Some(false) => {
+                "the IOS is mirrored (its crowns' occlusal side and its left and right teeth \
+                 contradict its FDI numbers)"
+            }
+            Some(true) => {
+                "the CBCT is mirrored (the IOS crowns' occlusal side and left and right teeth \
+                 agree with their FDI numbers)"
+            }
+            None => "one of them is mirrored",
+        };
+        return Some(Error::Mirrored(format!(
+            "{which}: the IOS fits the CBCT with a median distance of {:.2} mm as given but \
+             {:.2} mm when reflected; an x -> -x flip or an LPS/RAS conversion was applied to one \
+             modality only",
+            r.fit_mm, r.mirrored_fit_mm
+        )));
+    }
+    if r.fit_mm > GOOD_FIT_MM
+        && r.shifted_fit_mm < BETTER * r.fit_mm
+        && r.shifted_fit_mm < CLEAR_FIT_MM
+    {
+        return Some(Error::RegistrationRejected(format!(
+            "labels shifted by one tooth along the arch: the IOS crowns fit the CBCT teeth one \
+             position {} with a median distance of {:.2} mm, but {:.2} mm with the labels as \
+             given; renumber the IOS (or CBCT) teeth",
+            if shift_step > 0 {
+                "further left"
+            } else {
+                "further right"
+            },
+            r.shifted_fit_mm,
+            r.fit_mm
+        )));
+    }
+    if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
+        return Some(Error::RegistrationRejected(format!(
+            "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
+             crowns lie a median {:.2} mm from their CBCT teeth and each tooth fitted alone moves across its axis \
+             a median {:.2} mm (mismatch score {:.2}; the same patient's scans score below 2, \
+             refused above {MAX_MISMATCH}); check that both scans are of this patient",
+            r.fit_mm, r.tooth_translation_mm, r.mismatch
+        )));
+    }
+    None
+}
+
+/// Teeth whose IOS crown lies on another CBCT tooth, with the reason.
+fn misnumbered(r: &GateReport) -> Vec<(u8, String)> {
+    let on_other: BTreeMap<u8, (u8, f64, f64)> = r
+        .teeth
+        .iter()
+        .filter_map(|e| {
+            let (o, d) = e.best_other?;
+            (e.own_fit_mm > TOOTH_MISFIT_MM && d < BETTER * e.own_fit_mm)
+                .then_some((e.fdi, (o, d, e.own_fit_mm)))
+        })
+        .collect();
+    on_other
+        .iter()
+        .map(|(&f, &(o, d, own))| {
+            let swapped = on_other.get(&o).is_some_and(|x| x.0 == f);
+            let why = if swapped {
+                format!("the IOS labels {f} and {o} look swapped")
+            } else {
+                "the IOS label looks wrong".to_string()
+            };
+            (
+                f,
+                format!(
+                    "misnumbered: the IOS crown labelled {f} lies on CBCT tooth {o} (median \
+                     distance {d:.2} mm) rather than on CBCT tooth {f} ({own:.2} mm): {why}; \
+                     tooth not fused"
+                ),
+            )
+        })
+        .collect()
+}
+
+/// The error for IOS and CBCT teeth from different jaws, if that is the case.
+pub(crate) fn wrong_jaw(ios: &[u8], cbct: &[u8]) -> Option<Error> {
+    let jaws = |v: &[u8]| {
+        let mut j: Vec<_> = v.iter().map(|&f| jaw_of(f)).collect();
+        j.sort();
+        j.dedup();
+        j
+    };
+    let (ji, jc) = (jaws(ios), jaws(cbct));
+    if ji.len() == 1 && jc.len() == 1 && ji != jc {
+        let name = |j: crate::arch::Jaw| match j {
+            crate::arch::Jaw::Upper => "upper",
+            crate::arch::Jaw::Lower => "lower",
+        };
+        return Some(Error::RegistrationRejected(format!(
+            "wrong jaw: the IOS teeth are of the {} jaw, the CBCT teeth of the {} jaw; give \
+             both modalities of the same jaw",
+            name(ji[0]),
+            name(jc[0])
+        )));
+    }
+    None
+}
+
+/// Median over interior teeth (in arch order) of the largest departure of a tooth's own motion
+/// from the mean of its neighbours' (mm).
+fn roughness(ev: &[ToothEvidence]) -> f64 {
+    let mut e: Vec<&ToothEvidence> = ev.iter().collect();
+    e.sort_by_key(|x| arch_position(x.fdi));
+    median(
+        e.windows(3)
+            .map(|w| {
+                (0..3)
+                    .map(|k| {
+                        (w[1].own_motion[k] - 0.5 * (w[0].own_motion[k] + w[2].own_motion[k]))
+                            .length()
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect(),
+    )
+}
+
+/// The handedness of the IOS crowns from their own geometry: the occlusal direction (from each
+/// crown's margin to its centroid), the patient's right-to-left direction (FDI sides) and the
+/// front-to-back direction (incisors and canines vs premolars and molars) form a right- or
+/// left-handed frame, fixed by anatomy for each jaw. `None` without teeth on both sides and both
+/// in front and behind, or without margins.
+pub(crate) fn ios_handedness(teeth: &BTreeMap<u8, ToothData>) -> Option<bool> {
+    let mut up = DVec3::ZERO;
+    let (mut right, mut left, mut front, mut back) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (&f, d) in teeth {
+        up += occlusal(d)?;
+        let c = d.ios_centroid;
+        if arch_position(f) < 0 {
+            right.push(c)
+        } else {
+            left.push(c)
+        }
+        if f % 10 <= 3 {
+            front.push(c)
+        } else {
+            back.push(c)
+        }
+    }
+    if [&right, &left, &front, &back].iter().any(|v| v.is_empty()) || up == DVec3::ZERO {
+        return None;
+    }
+    let r = mean(&right) - mean(&left);
+    let fwd = mean(&front) - mean(&back);
+    let s = r.cross(fwd).dot(up.normalize());
+    let upper = teeth
+        .keys()
+        .next()
+        .is_some_and(|&f| jaw_of(f) == crate::arch::Jaw::Upper);
+    Some((s > 0.0) == upper)
+}
+
+/// The occlusal direction of an IOS crown (unit, IOS frame): from the centroid of its margin (its
+/// longest boundary loop) to its centroid. `None` for a closed crown.
+fn occlusal(d: &ToothData) -> Option<DVec3> {
+    let loops = crate::mesh::boundary_loops(&d.ios_mesh);
+    let rim = loops.iter().max_by_key(|l| l.len())?;
+    let b = mean(
+        &rim.iter()
+            .map(|&v| d.ios_mesh.positions[v as usize])
+            .collect::<Vec<_>>(),
+    );
+    Some((d.ios_centroid - b).normalize_or_zero())
+}
