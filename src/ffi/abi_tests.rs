@@ -257,11 +257,12 @@ fn options_struct_size_is_checked_before_reading_fields() {
 #[test]
 fn labeled_jaw_is_split_into_teeth_with_their_source_vertices() {
     let s = S::new();
-    // Two open squares, labels 11 and 21 (one per vertex); vertex 8 is gingiva (label 0).
+    // Two open 5 mm squares (crown-sized, so the unit check passes), labels 11 and 21 (one per
+    // vertex); vertex 8 is gingiva (label 0).
     let v: [f64; 27] = [
-        0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0., //
-        5., 0., 0., 6., 0., 0., 6., 1., 0., 5., 1., 0., //
-        9., 9., 9.,
+        0., 0., 0., 5., 0., 0., 5., 5., 0., 0., 5., 0., //
+        25., 0., 0., 30., 0., 0., 30., 5., 0., 25., 5., 0., //
+        45., 45., 45.,
     ];
     let idx: [u32; 12] = [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7];
     let labels: [i32; 9] = [11, 11, 11, 11, 21, 21, 21, 21, 0];
