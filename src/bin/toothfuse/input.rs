@@ -83,9 +83,10 @@ impl InputArgs {
             return Ok(None);
         };
         let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
-        eprintln!("{ios_note}");
         if toothfuse::io::is_volume_path(cbct) {
-            return Ok(Some((ios, self.read_volume_teeth(cbct)?)));
+            let teeth = self.read_volume_teeth(cbct)?;
+            eprintln!("{ios_note}");
+            return Ok(Some((ios, teeth)));
         }
         let opts = TeethOptions {
             scheme: self.scheme(),
@@ -94,6 +95,7 @@ impl InputArgs {
         let t = toothfuse::io::read_teeth_opts(cbct, &opts)
             .with_context(|| format!("reading CBCT {}", cbct.display()))?;
         // How the labels were read, said once both inputs are read (errors stay one line).
+        eprintln!("{ios_note}");
         eprintln!(
             "CBCT {}: {}numbering {} ({})",
             cbct.display(),
