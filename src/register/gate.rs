@@ -386,7 +386,11 @@ fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
     // loose (the full registration restarts for that): its verdicts need a hypothesis that fits
     // well, and the "does not match" verdict needs a long enough arch.
     let long_arch = r.teeth.len() >= MIN_TEETH_FOR_MISMATCH;
-    if r.fit_mm > GOOD_FIT_MM
+    // On a short arch with no evidence of the IOS's own handedness (teeth of one side only), a
+    // reflection of a few nearly collinear teeth can fit as well as the truth: no mirror verdict.
+    let mirror_decidable = long_arch || r.ios_handed_ok.is_some();
+    if mirror_decidable
+        && r.fit_mm > GOOD_FIT_MM
         && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm
         && r.mirrored_fit_mm < CLEAR_FIT_MM
     {
