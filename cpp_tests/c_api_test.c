@@ -145,10 +145,11 @@ int main(void) {
     }
   }
 
-  /* A labeled jaw: one IOS crown (an open tetrahedron fan) with per-face labels. */
+  /* A labeled jaw: one crown-sized IOS crown (an open tetrahedron fan, 8 mm: the unit check
+     refuses millimetre meshes the size of centimetre ones) with per-face labels. */
   {
     static const double jaw_v[5][3] = {
-        {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {3, 3, 3}};
+        {0, 0, 0}, {8, 0, 0}, {0, 8, 0}, {0, 0, 8}, {24, 24, 24}};
     static const uint32_t jaw_t[9] = {0, 1, 3, 1, 2, 3, 2, 4, 1};
     int32_t labels[3] = {36, 36, 0};
     toothfuse_mesh_info info;

@@ -5,42 +5,22 @@
 //!
 //! `cargo run --release --example crossing_survey [CASE_DIR ...]`
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
-use toothfuse::Rigid;
-use toothfuse::fuse::{FuseOptions, Preset, ToothTransforms, fuse_jaw};
+use toothfuse::fuse::{FuseOptions, Preset, fuse_jaw};
 use toothfuse::mesh_check::self_intersections;
 
 fn main() -> anyhow::Result<()> {
     let mut dirs: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
     if dirs.is_empty() {
-        for c in ["f901_upper", "f902_lower"] {
-            dirs.push(PathBuf::from("../shared/data/foreign").join(c));
-        }
+        dirs = toothfuse::eval::foreign::case_dirs();
     }
     for dir in dirs {
-        let ios = toothfuse::io::read_mesh(dir.join("ios.ply"))?;
-        let cbct = toothfuse::io::read_teeth(dir.join("cbct.ply"))?;
-        let truth: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join("truth/transforms.json"))?)?;
-        let mut tr = BTreeMap::new();
-        for (k, m) in truth["ios_from_cbct"].as_object().unwrap() {
-            let rows: Vec<f64> = m
-                .as_array()
-                .unwrap()
-                .iter()
-                .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
-                .collect();
-            let a: [f64; 16] = rows.try_into().unwrap();
-            tr.insert(
-                k.parse::<u8>()?,
-                ToothTransforms {
-                    cbct_to_output: Rigid::from_row_major(&a),
-                    ios_to_output: Rigid::IDENTITY,
-                },
-            );
-        }
+        let toothfuse::eval::foreign::ForeignCase {
+            ios,
+            cbct,
+            truth: mut tr,
+        } = toothfuse::eval::foreign::read_case(&dir)?;
         if let Ok(only) = std::env::var("ONLY") {
             let keep: Vec<u8> = only.split(',').filter_map(|x| x.parse().ok()).collect();
             tr.retain(|k, _| keep.contains(k));

@@ -315,7 +315,8 @@ typedef struct toothfuse_fused_quality {
    */
   size_t band_faces;
   /**
-   * IOS crown vertices kept (all of them).
+   * IOS crown vertices kept: all of them except the ones trimmed from the margin fringe
+   * (see `toothfuse_session_fused_trim`).
    */
   size_t crown_vertices;
   /**
@@ -801,6 +802,22 @@ toothfuse_status toothfuse_session_copy_fused_labels(const struct toothfuse_sess
 toothfuse_status toothfuse_session_fused_quality(const struct toothfuse_session *session,
                                                  int32_t fdi,
                                                  struct toothfuse_fused_quality *quality_out);
+
+/**
+ * Writes how much of fused tooth `fdi`'s IOS crown was trimmed from its margin fringe: the
+ * number of IOS crown vertices dropped (folded over other crown faces, or crossed by the band)
+ * to `*vertices_out` and the largest geodesic distance (mm) of a dropped vertex from the original
+ * margin to `*reach_mm_out` (0 when none was dropped; never more than the fringe reach, 0.3 mm by
+ * default). Every other IOS crown vertex is in the fused mesh bitwise. WRONG_STATE before a fuse;
+ * MISSING_DATA (with the reason) for a tooth that was not fused.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `vertices_out` and `reach_mm_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_trim(const struct toothfuse_session *session,
+                                              int32_t fdi,
+                                              size_t *vertices_out,
+                                              double *reach_mm_out);
 
 /**
  * Writes the vertex count and the index count (3 per triangle) of tooth `fdi` of `modality`.

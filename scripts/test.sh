@@ -7,8 +7,7 @@
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
 # tests against the installed package), an outside find_package consumer, a pkg-config build, and
 # the Python package: pip install ./bindings/python into a fresh venv (numpy and pytest from PyPI;
-# the library is the one cargo already built in target/) and its pytest suite run there.
-# tests against the installed package), an outside find_package consumer and a pkg-config build,
+# the library is the one cargo already built in target/) and its pytest suite run there;
 # then scripts/check_sanitizers.sh (C/C++ tests under ASan+UBSan, valgrind memcheck, Miri over
 # the C-ABI unit tests) and scripts/check_fuzz.sh (every cargo-fuzz target for 20 s, nightly only).
 set -euo pipefail

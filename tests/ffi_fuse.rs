@@ -174,15 +174,25 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
             .map(|(q, _)| q.to_array().map(f64::to_bits))
             .collect();
         let crown = s.positions(TOOTHFUSE_MODALITY_IOS, fdi);
-        assert_eq!(kept.len(), crown.len() / 3, "tooth {fdi}");
-        for c in crown.chunks_exact(3) {
-            let q = ios_to_output.apply(DVec3::new(c[0], c[1], c[2]));
-            assert!(
-                kept.contains(&q.to_array().map(f64::to_bits)),
-                "tooth {fdi}: {q}"
-            );
-        }
-        assert_eq!(q.crown_vertices, crown.len() / 3);
+        let (mut trimmed, mut reach) = (usize::MAX, f64::NAN);
+        // SAFETY: live session, valid out pointers.
+        let st = unsafe { toothfuse_session_fused_trim(s.0, fdi, &mut trimmed, &mut reach) };
+        assert_eq!(st, toothfuse_status::Ok);
+        assert!(
+            trimmed * 200 <= crown.len() / 3 && reach <= 0.3,
+            "{trimmed} {reach}"
+        );
+        assert_eq!(kept.len() + trimmed, crown.len() / 3, "tooth {fdi}");
+        let missing = crown
+            .chunks_exact(3)
+            .map(|c| ios_to_output.apply(DVec3::new(c[0], c[1], c[2])))
+            .filter(|q| !kept.contains(&q.to_array().map(f64::to_bits)))
+            .count();
+        assert_eq!(
+            missing, trimmed,
+            "tooth {fdi}: only trimmed vertices are missing"
+        );
+        assert_eq!(q.crown_vertices, crown.len() / 3 - trimmed);
     }
     // The whole jaw: every fused tooth, labeled by FDI.
     let (pos, _, src) = fused(&s, 0);
@@ -226,6 +236,14 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
         "{}",
         s.error()
     );
+    let (mut trimmed, mut reach) = (0usize, 0f64);
+    // SAFETY: live session, valid out pointers.
+    let st = unsafe { toothfuse_session_fused_trim(s.0, 48, &mut trimmed, &mut reach) };
+    assert_eq!(st, toothfuse_status::MissingData);
+    // SAFETY: live session; a NULL out pointer is refused.
+    let st = unsafe { toothfuse_session_fused_trim(s.0, fdis[0], ptr::null_mut(), &mut reach) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    assert!(s.error().contains("vertices_out"), "{}", s.error());
     let bad = toothfuse_options {
         frame: 2,
         ..toothfuse_options::default()

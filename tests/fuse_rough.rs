@@ -9,13 +9,11 @@
 //! at most 0.5 % trimmed): see the bounds below and the README's fusion table.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use toothfuse::arch::Jaw;
 use toothfuse::fuse::{FuseOptions, FusedJaw, Preset, ToothTransforms, fuse_jaw, ios_crowns};
 use toothfuse::mesh::LabeledMesh;
 use toothfuse::mesh_check::self_intersections;
 use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
-use toothfuse::{Rigid, TriMesh};
 
 /// Measured bounds of one family of inputs: added crossing pairs per tooth, trimmed share.
 struct Bounds {
@@ -164,60 +162,22 @@ fn dense_arches() {
     ]);
 }
 
-fn foreign_dir() -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/foreign");
-    d.is_dir().then_some(d)
-}
-
-/// The foreign case's true CBCT → IOS transforms (output frame = IOS frame).
-fn foreign_truth(dir: &std::path::Path) -> BTreeMap<u8, ToothTransforms> {
-    let text = std::fs::read_to_string(dir.join("truth/transforms.json")).expect("truth");
-    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
-    v["ios_from_cbct"]
-        .as_object()
-        .expect("ios_from_cbct")
-        .iter()
-        .map(|(k, m)| {
-            let a: Vec<f64> = m
-                .as_array()
-                .expect("rows")
-                .iter()
-                .flat_map(|r| {
-                    r.as_array()
-                        .expect("row")
-                        .iter()
-                        .map(|x| x.as_f64().expect("number"))
-                })
-                .collect();
-            let a: [f64; 16] = a.try_into().expect("4x4");
-            (
-                k.parse::<u8>().expect("fdi"),
-                ToothTransforms {
-                    cbct_to_output: Rigid::from_row_major(&a),
-                    ios_to_output: Rigid::IDENTITY,
-                },
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn foreign_jaws() {
-    let Some(dir) = foreign_dir() else {
+    let dirs = toothfuse::eval::foreign::case_dirs();
+    if dirs.is_empty() {
         println!("SKIPPED: ../shared/data/foreign is not beside the checkout");
         return;
-    };
-    for case in ["f901_upper", "f902_lower"] {
-        let d = dir.join(case);
-        let ios = toothfuse::io::read_mesh(d.join("ios.ply")).expect("ios");
-        let cbct: BTreeMap<u8, TriMesh> =
-            toothfuse::io::read_teeth(d.join("cbct.ply")).expect("cbct");
-        let tr = foreign_truth(&d);
+    }
+    for d in dirs {
+        let case = d.file_name().unwrap_or_default().to_string_lossy();
+        let c = toothfuse::eval::foreign::read_case(&d).expect("case");
+        let (ios, cbct, tr) = (c.ios, c.cbct, c.truth);
         let fused =
             fuse_jaw(&ios, &cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         assert!(fused.failed.is_empty(), "{case}: failed {:?}", fused.failed);
         assert_eq!(fused.teeth.len(), 14, "{case}");
-        let (n, trimmed) = check(&FOREIGN, case, &ios, &fused, &tr);
+        let (n, trimmed) = check(&FOREIGN, &case, &ios, &fused, &tr);
         println!("{case}: {n} teeth fused, {trimmed} IOS vertices trimmed");
     }
 }

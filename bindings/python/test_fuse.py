@@ -69,7 +69,11 @@ class FuseTest(unittest.TestCase):
                 crown = [tuple(xyz[3 * v:3 * v + 3]) for v in sorted(verts)
                          if jaw.sources[v] == toothfuse.SOURCE_IOS]
                 self.assertEqual(len(set(crown)), len(crown))
-                self.assertEqual(set(crown), crowns[fdi])
+                # Every IOS crown vertex is kept bitwise, except the ones the library reports
+                # trimmed from the folded margin fringe (none or a few, within 0.3 mm).
+                self.assertTrue(set(crown) <= crowns[fdi])
+                self.assertEqual(len(crowns[fdi]) - len(crown), q["ios_vertices_trimmed"])
+                self.assertLessEqual(q["ios_trim_reach_mm"], 0.3)
                 self.assertEqual(q["crown_vertices"], len(crown))
                 # IOS frame: the IOS -> output transform is the identity.
                 self.assertEqual(jaw.transforms[fdi]["ios_to_output"],

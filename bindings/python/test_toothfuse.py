@@ -9,7 +9,7 @@ import toothfuse
 
 def ctypes_sizeof_options():
     import ctypes
-    return ctypes.sizeof(toothfuse._Options)
+    return ctypes.sizeof(toothfuse._core._Options)
 
 CUBE = [0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 0, 0, 2, 2, 0, 2, 2, 2, 2, 0, 2, 2]
 CUBE = [c + 0.1 for c in CUBE]
@@ -111,7 +111,7 @@ class BindingsTest(unittest.TestCase):
             self.assertIn("micrometres", str(e.exception))
             self.assertEqual(s.teeth(toothfuse.CBCT), [])
             # The override reaches the library: an unknown value would be refused there.
-            o = toothfuse._options("default", "cbct", accept_questionable=True)
+            o = toothfuse._core._options("default", "cbct", accept_questionable=True)
             self.assertEqual(o.accept_questionable, 1)
             self.assertEqual(o.struct_size, ctypes_sizeof_options())
 

@@ -10,6 +10,7 @@ use crate::{Error, Result};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+pub mod foreign;
 pub mod oracle;
 
 /// Name of the oracle row: crown fit with known correspondences (threshold bias and distortion).

@@ -350,7 +350,8 @@ pub struct toothfuse_fused_quality {
     pub degenerate_faces: usize,
     /// Band triangles.
     pub band_faces: usize,
-    /// IOS crown vertices kept (all of them).
+    /// IOS crown vertices kept: all of them except the ones trimmed from the margin fringe
+    /// (see `toothfuse_session_fused_trim`).
     pub crown_vertices: usize,
     /// Every edge in exactly two faces.
     pub closed: bool,
@@ -393,6 +394,38 @@ pub unsafe extern "C" fn toothfuse_session_fused_quality(
             };
             // SAFETY: forwarded contract on `quality_out`.
             unsafe { write_out(quality_out, out, "quality_out") }
+        };
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_session(session, body) }
+    }
+}
+
+/// Writes how much of fused tooth `fdi`'s IOS crown was trimmed from its margin fringe: the
+/// number of IOS crown vertices dropped (folded over other crown faces, or crossed by the band)
+/// to `*vertices_out` and the largest geodesic distance (mm) of a dropped vertex from the original
+/// margin to `*reach_mm_out` (0 when none was dropped; never more than the fringe reach, 0.3 mm by
+/// default). Every other IOS crown vertex is in the fused mesh bitwise. WRONG_STATE before a fuse;
+/// MISSING_DATA (with the reason) for a tooth that was not fused.
+///
+/// # Safety
+/// `session` must be NULL or a live session; `vertices_out` and `reach_mm_out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_fused_trim(
+    session: *const toothfuse_session,
+    fdi: i32,
+    vertices_out: *mut usize,
+    reach_mm_out: *mut f64,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        let body = |s: &Session| -> FfiResult {
+            check_out(vertices_out, "vertices_out")?;
+            check_out(reach_mm_out, "reach_mm_out")?;
+            let q = &fused_tooth(s, fdi)?.quality;
+            // SAFETY: forwarded contract on both output pointers.
+            unsafe {
+                write_out(vertices_out, q.ios_vertices_trimmed, "vertices_out")?;
+                write_out(reach_mm_out, q.ios_trim_reach_mm, "reach_mm_out")
+            }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

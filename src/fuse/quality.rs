@@ -36,7 +36,7 @@ pub struct ToothQuality {
     pub band_edge_max: f64,
     /// Number of band triangles.
     pub band_faces: usize,
-    /// IOS crown vertices kept (all of them).
+    /// IOS crown vertices kept: all of them except the ones trimmed from the margin fringe.
     pub crown_vertices: usize,
     /// Small crown holes filled.
     pub holes_filled: usize,

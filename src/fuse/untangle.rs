@@ -236,19 +236,45 @@ fn find_bad(
     (crossings, bad)
 }
 
+/// The faces around a star, split once per vertex: the other faces (which do not move while
+/// the star's vertex does) with their boxes, and the star's own faces among them by star index.
+struct Around {
+    others: Vec<(u32, (DVec3, DVec3))>,
+    star_members: Vec<usize>,
+}
+
+impl Around {
+    fn new(mesh: &TriMesh, star: &[u32], faces: &[u32]) -> Around {
+        let mut others = Vec::with_capacity(faces.len());
+        let mut star_members = Vec::new();
+        for &g in faces {
+            match star.iter().position(|&f| f == g) {
+                Some(j) => star_members.push(j),
+                None => others.push((g, bbox(mesh, g as usize))),
+            }
+        }
+        Around {
+            others,
+            star_members,
+        }
+    }
+}
+
 /// `(crossings of the star with its surroundings, star faces turned over against `normals`,
 /// smallest star angle)` with `v` where it is. Counting stops past `max_folded` turned-over
-/// faces or `max_crossings` crossings (the candidate has lost by then): `None`.
+/// faces or `max_crossings` crossings (the candidate has lost by then): `None`. Each pair of
+/// star faces found among `around` counts once.
 fn score(
     mesh: &TriMesh,
     star: &[u32],
     normals: &[DVec3],
-    around: &[u32],
+    around: &Around,
     max_folded: usize,
     max_crossings: usize,
 ) -> Option<(usize, usize, f64)> {
     let mut ang = 180.0f64;
     let mut folded = 0;
+    let mut boxes = Vec::with_capacity(star.len());
     for (k, &f) in star.iter().enumerate() {
         let [a, b, c] = mesh.corners(f as usize);
         let n = (b - a).cross(c - a);
@@ -256,25 +282,28 @@ fn score(
             folded += 1;
         }
         ang = ang.min(min_angle(a, b, c));
+        boxes.push((a.min(b).min(c), a.max(b).max(c)));
     }
     if folded > max_folded {
         return None;
     }
     let mut crossings = 0;
+    let mut count = |f: u32, g: u32| {
+        if triangles_intersect(mesh, f as usize, g as usize) {
+            crossings += 1;
+        }
+        crossings > max_crossings
+    };
     for (k, &f) in star.iter().enumerate() {
-        let bf = bbox(mesh, f as usize);
-        for &g in around {
-            // Star–star pairs once.
-            if g == f || (star.contains(&g) && star[..k].contains(&g)) {
-                continue;
+        let bf = boxes[k];
+        for &(g, bg) in &around.others {
+            if overlap(bf, bg) && count(f, g) {
+                return None;
             }
-            if overlap(bf, bbox(mesh, g as usize))
-                && triangles_intersect(mesh, f as usize, g as usize)
-            {
-                crossings += 1;
-                if crossings > max_crossings {
-                    return None;
-                }
+        }
+        for &j in &around.star_members {
+            if j > k && overlap(bf, boxes[j]) && count(f, star[j]) {
+                return None;
             }
         }
     }
@@ -319,7 +348,7 @@ fn improve_vertex(
         hi = hi.max(mesh.positions[w as usize]);
     }
     let grow = DVec3::splat(0.5 * scale);
-    let around = grid.faces_in_box(lo - grow, hi + grow);
+    let around = Around::new(mesh, star, &grid.faces_in_box(lo - grow, hi + grow));
     let Some(current) = score(mesh, star, &normals, &around, usize::MAX, usize::MAX) else {
         return false;
     };
@@ -382,7 +411,12 @@ fn improve_vertex(
         a.0 < b.0 || (a.0 == b.0 && (a.1 < b.1 || (a.1 == b.1 && a.2 < b.2 - 0.1)))
     };
     let mut best = (key(current), p0);
+    // Nothing beats no crossing, no turned-over face and every angle at the cap.
+    let perfect = (0, 0, -30.0);
     for c in cands {
+        if best.0 == perfect {
+            break;
+        }
         if !c.is_finite() || (c - p0).length() > 2.0 * h {
             continue;
         }

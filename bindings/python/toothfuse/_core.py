@@ -200,6 +200,8 @@ _copy_fs = _fn("toothfuse_session_copy_fused_sources", _st, _S, ctypes.c_int32,
 _copy_fl = _fn("toothfuse_session_copy_fused_labels", _st, _S, _i32_p, ctypes.c_size_t)
 _quality = _fn("toothfuse_session_fused_quality", _st, _S, ctypes.c_int32,
                ctypes.POINTER(_FusedQuality))
+_trim = _fn("toothfuse_session_fused_trim", _st, _S, ctypes.c_int32,
+            ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_double))
 
 
 def version():
@@ -564,12 +566,18 @@ class Session:
 
     def fused_quality(self, fdi):
         """Quality of a fused tooth as a dict (closed, manifold, watertight, components,
-        boundary_edges, volume, self_intersections (None when not checked), ...)."""
+        boundary_edges, volume, self_intersections (None when not checked), ...,
+        ios_vertices_trimmed and ios_trim_reach_mm: IOS crown vertices dropped from the folded
+        margin fringe and their largest distance from the margin in mm)."""
         q = _FusedQuality()
         self._check(_quality(self._h, fdi, ctypes.byref(q)))
         d = {name: getattr(q, name) for name, _ in _FusedQuality._fields_}
         if d["self_intersections"] == ctypes.c_size_t(-1).value:
             d["self_intersections"] = None
+        trimmed, reach = ctypes.c_size_t(), ctypes.c_double()
+        self._check(_trim(self._h, fdi, ctypes.byref(trimmed), ctypes.byref(reach)))
+        d["ios_vertices_trimmed"] = trimmed.value
+        d["ios_trim_reach_mm"] = reach.value
         return d
 
 
