@@ -15,6 +15,7 @@ import datetime
 import importlib.metadata
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -36,14 +37,20 @@ FUSE_ROUNDS = 3
 FUSE_CASE = "f901_upper"
 
 
-def run(cmd: list, env: dict | None = None) -> float:
-    """Runs a command to completion; returns its wall time in seconds."""
-    t0 = time.perf_counter()
+def cpu_of_children() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run(cmd: list, env: dict | None = None) -> tuple[float, float]:
+    """Runs a command to completion; returns its wall time and its CPU time (user + system,
+    all threads), in seconds."""
+    t0, c0 = time.perf_counter(), cpu_of_children()
     p = subprocess.run([str(c) for c in cmd], env=env, capture_output=True, text=True)
-    elapsed = time.perf_counter() - t0
+    elapsed, cpu = time.perf_counter() - t0, cpu_of_children() - c0
     if p.returncode != 0:
         sys.exit(f"failed ({p.returncode}): {' '.join(map(str, cmd))}\n{p.stderr[-3000:]}")
-    return elapsed
+    return elapsed, cpu
 
 
 def open3d_missing() -> str | None:
@@ -62,6 +69,10 @@ def tre(est_cbct_to_ios: np.ndarray, truth_cbct_to_ios: np.ndarray, pts: np.ndar
 def tre_cell(per_tooth: list) -> str:
     mean, rms = np.mean(per_tooth, axis=0)
     return f"{mean:.3f} / {rms:.3f}"
+
+
+def spread(values: list) -> str:
+    return f"{statistics.median(values):.1f} ({min(values):.1f}–{max(values):.1f})"
 
 
 def ratio(a: float, b: float) -> str:
@@ -111,24 +122,30 @@ def icp_comparison(foreign: Path, skip_open3d: str | None) -> list:
             return statistics.median(
                 np.mean([t["call_ms"] for t in rnd[c]["teeth"]]) for rnd in results[name])
 
-        def tres(name: str) -> list:
-            est = results[name][0][c]["teeth"]
-            return [tre(np.linalg.inv(np.reshape(e["ios_to_cbct"], (4, 4))),
+        def tres(ios_to_cbct: list) -> list:
+            return [tre(np.linalg.inv(np.reshape(m, (4, 4))),
                         np.reshape(t["truth_cbct_to_ios"], (4, 4)),
                         np.fromfile(icp_dir / t["dir"] / "eval.f64", "<f8").reshape(-1, 3))
-                    for e, t in zip(est, teeth)]
+                    for m, t in zip(ios_to_cbct, teeth)]
+
+        def estimates(name: str) -> list:
+            return [e["ios_to_cbct"] for e in results[name][0][c]["teeth"]]
+
+        start = tres([np.fromfile(icp_dir / t["dir"] / "initial.f64", "<f8") for t in teeth])
+        tre_measure = f"TRE mean / RMS (mm), from {tre_cell(start)} at the start"
 
         if any(rnd[c]["teeth"][k]["iterations"] != manifest["iterations"]
                for rnd in results["toothfuse"] for k in range(len(teeth))):
             sys.exit(f"{case['name']}: toothfuse did not run {manifest['iterations']} iterations")
-        tf_it, tf_call, tf_tre = per_iteration("toothfuse"), per_call("toothfuse"), tres("toothfuse")
+        tf_it, tf_call = per_iteration("toothfuse"), per_call("toothfuse")
+        tf_tre = tres(estimates("toothfuse"))
         if skip_open3d:
             rows += [(title, "ms per iteration", f"{tf_it:.2f}", "n/a", "–"),
-                     (title, "TRE mean / RMS (mm)", tre_cell(tf_tre), "n/a", "–")]
+                     (title, tre_measure, tre_cell(tf_tre), "n/a", "–")]
             continue
         o_it, o1_it = per_iteration("open3d"), per_iteration("open3d_1thread")
         o_call = per_call("open3d")
-        o_tre = tres("open3d")
+        o_tre = tres(estimates("open3d"))
         rows += [
             (title, "ms per iteration (Open3D on all cores)", f"{tf_it:.2f}", f"{o_it:.2f}",
              ratio(tf_it, o_it)),
@@ -136,7 +153,7 @@ def icp_comparison(foreign: Path, skip_open3d: str | None) -> list:
              ratio(tf_it, o1_it)),
             (title, f"ms per tooth: index + {manifest['iterations']} iterations",
              f"{tf_call:.1f}", f"{o_call:.1f}", ratio(tf_call, o_call)),
-            (title, "TRE mean / RMS (mm)", tre_cell(tf_tre), tre_cell(o_tre),
+            (title, tre_measure, tre_cell(tf_tre), tre_cell(o_tre),
              ratio(np.mean(tf_tre, axis=0)[0], np.mean(o_tre, axis=0)[0])),
         ]
     return rows
@@ -168,7 +185,8 @@ def fuse_scores(out_dir: Path, ios_to_cbct: dict, case: Path) -> tuple:
     return tres, watertight, len(ios_to_cbct)
 
 
-def fuse_comparison(foreign: Path, skip_open3d: str | None) -> list:
+def fuse_comparison(foreign: Path, skip_open3d: str | None) -> tuple[list, str]:
+    """Table rows, and a note on where toothfuse's time went."""
     case = foreign / FUSE_CASE
     tf_out, ref_out = OUT / "fuse_toothfuse", OUT / "fuse_reference"
     sides = {"toothfuse": [TOOTHFUSE, "fuse", "--ios", case / "ios.ply", "--cbct",
@@ -177,30 +195,41 @@ def fuse_comparison(foreign: Path, skip_open3d: str | None) -> list:
         sides["reference"] = [sys.executable, HERE / "paper_reference.py", "--ios",
                               case / "ios.ply", "--cbct", case / "cbct.ply", "--out", ref_out]
     wall = {name: [] for name in sides}
+    cpu = {name: [] for name in sides}
     for r in range(FUSE_ROUNDS):
         for name in (list(sides) if r % 2 == 0 else list(reversed(sides))):
-            wall[name].append(run(sides[name]))
+            w, c = run(sides[name])
+            wall[name].append(w)
+            cpu[name].append(c)
     report = json.loads((tf_out / "report.json").read_text())
     if report["frame"] != "cbct":
         sys.exit("toothfuse report.json: expected the CBCT output frame")
     tf = fuse_scores(tf_out, {t["fdi"]: np.reshape(t["ios_to_output"], (4, 4))
                               for t in report["teeth"]}, case)
     title = f"whole fuse, {FUSE_CASE}"
-    tf_wall = statistics.median(wall["toothfuse"])
+    stages = report["timing_ms"]
+    note = ("toothfuse's stages in its last fuse run (report.json): " + ", ".join(
+        f"{k} {stages[k] / 1e3:.1f} s" for k in ("register", "cut", "stitch")) + ".")
+    wall_measure = "wall time of the whole process (s): median (min–max)"
+    cpu_measure = "CPU time of the whole process, all threads (s): median (min–max)"
     if skip_open3d:
-        return [(title, "wall time of the whole process (s)", f"{tf_wall:.1f}", "n/a", "–"),
+        return [(title, wall_measure, spread(wall["toothfuse"]), "n/a", "–"),
+                (title, cpu_measure, spread(cpu["toothfuse"]), "n/a", "–"),
                 (title, "TRE mean / RMS (mm)", tre_cell(tf[0]), "n/a", "–"),
-                (title, "watertight teeth (VTK)", f"{tf[1]}/{tf[2]}", "n/a", "–")]
+                (title, "watertight teeth (VTK)", f"{tf[1]}/{tf[2]}", "n/a", "–")], note
     ref_t = json.loads((ref_out / "transforms.json").read_text())["ios_to_cbct"]
     ref = fuse_scores(ref_out, {int(f): np.reshape(m, (4, 4)) for f, m in ref_t.items()}, case)
-    ref_wall = statistics.median(wall["reference"])
+    med = {k: {name: statistics.median(v) for name, v in d.items()}
+           for k, d in (("wall", wall), ("cpu", cpu))}
     return [
-        (title, "wall time of the whole process (s)", f"{tf_wall:.1f}", f"{ref_wall:.1f}",
-         ratio(tf_wall, ref_wall)),
+        (title, wall_measure, spread(wall["toothfuse"]), spread(wall["reference"]),
+         ratio(med["wall"]["toothfuse"], med["wall"]["reference"])),
+        (title, cpu_measure, spread(cpu["toothfuse"]), spread(cpu["reference"]),
+         ratio(med["cpu"]["toothfuse"], med["cpu"]["reference"])),
         (title, "TRE mean / RMS (mm)", tre_cell(tf[0]), tre_cell(ref[0]),
          ratio(np.mean(tf[0], axis=0)[0], np.mean(ref[0], axis=0)[0])),
         (title, "watertight teeth (VTK)", f"{tf[1]}/{tf[2]}", f"{ref[1]}/{ref[2]}", "–"),
-    ]
+    ], note
 
 
 def package_versions() -> str:
@@ -222,7 +251,9 @@ def main() -> None:
     if skip_open3d:
         print(f"Open3D cannot be imported ({skip_open3d}): its comparisons are skipped")
     load_before = os.getloadavg()[0]
-    rows = icp_comparison(args.foreign, skip_open3d) + fuse_comparison(args.foreign, skip_open3d)
+    rows = icp_comparison(args.foreign, skip_open3d)
+    fuse_rows, fuse_note = fuse_comparison(args.foreign, skip_open3d)
+    rows += fuse_rows
     load_after = os.getloadavg()[0]
     lines = [
         f"Measured {datetime.date.today()} on {os.cpu_count()} cores, load average "
@@ -230,6 +261,8 @@ def main() -> None:
         f"(ICP) and {FUSE_ROUNDS} (fuse) interleaved runs; {package_versions()}."
         + (f" Open3D could not be imported ({skip_open3d}): its columns are n/a."
            if skip_open3d else ""),
+        "",
+        fuse_note,
         "",
         "| comparison | measure | toothfuse | Open3D / paper-style reference "
         "| toothfuse ÷ other |",
