@@ -118,13 +118,19 @@ def register(ios: dict, cbct: dict, order: list[int]) -> dict[int, np.ndarray]:
     return ios_to_cbct
 
 
-def boundary_loop(triangles: np.ndarray) -> np.ndarray:
-    """The longest loop of boundary edges (edges of one face): the IOS margin, or the CBCT cut."""
+def mesh_edges(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each edge once, as (lower, higher) vertex index, and the number of faces it borders."""
     edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     n = int(triangles.max()) + 1
     keys, count = np.unique(edges[:, 0] * n + edges[:, 1], return_counts=True)
+    return np.stack(np.divmod(keys, n), axis=1), count
+
+
+def boundary_loop(triangles: np.ndarray) -> np.ndarray:
+    """The longest loop of boundary edges (edges of one face): the IOS margin, or the CBCT cut."""
+    edges, count = mesh_edges(triangles)
     neighbours: dict[int, list[int]] = {}
-    for a, b in zip(*np.divmod(keys[count == 1], n)):
+    for a, b in edges[count == 1]:
         neighbours.setdefault(int(a), []).append(int(b))
         neighbours.setdefault(int(b), []).append(int(a))
     loops = []
@@ -146,7 +152,7 @@ def boundary_loop(triangles: np.ndarray) -> np.ndarray:
 
 def edge_graph(vertices: np.ndarray, triangles: np.ndarray, keep: np.ndarray):
     """Sparse symmetric graph of the mesh edges between kept vertices, weighted by length."""
-    e = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    e, _ = mesh_edges(triangles)
     e = e[keep[e[:, 0]] & keep[e[:, 1]]]
     w = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
     n = len(vertices)

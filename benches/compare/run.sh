@@ -7,6 +7,8 @@
 # else from shared/data/foreign beside the checkout. Not part of scripts/test.sh.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+# Keeps benches/compare free of __pycache__ folders.
+export PYTHONDONTWRITEBYTECODE=1
 
 VENV=build/compare-venv
 PY="$VENV/bin/python"
@@ -19,7 +21,8 @@ if ! "$PY" -m pip install --quiet --disable-pip-version-check open3d==0.20.0; th
     echo "open3d 0.20.0 could not be installed for $("$PY" --version): the Open3D side is skipped"
 fi
 # Open3D's wheel links libusb, which slim Debian images lack.
-if "$PY" -c "import open3d" 2>&1 | grep -q "libusb-1.0.so"; then
+import_error=$("$PY" -c "import open3d" 2>&1 || true)
+if [[ "$import_error" == *libusb-1.0.so* ]]; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
         apt-get install -y -qq libusb-1.0-0 >/dev/null \
             || { apt-get update -qq && apt-get install -y -qq libusb-1.0-0 >/dev/null; }
