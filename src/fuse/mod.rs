@@ -2,6 +2,7 @@
 //! ([`crate::cut`]) and stitching ([`crate::stitch`]) into one watertight mesh; per jaw, all
 //! fused teeth in one mesh with per-vertex FDI labels and sources.
 
+mod band_crossings;
 mod band_opt;
 pub mod fringe;
 mod jaw;

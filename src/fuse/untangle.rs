@@ -7,6 +7,7 @@
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
 //! vertices (IOS margin, CBCT cut) never move.
 
+use super::band_crossings::{Recount, bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use crate::mesh::TriMesh;
 use crate::mesh_check::{TriangleGrid, triangles_intersect};
@@ -55,15 +56,6 @@ fn has_angle_under(a: DVec3, b: DVec3, c: DVec3, cos_limit: f64) -> bool {
     corner(a, b, c) || corner(b, c, a) || corner(c, a, b)
 }
 
-fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
-    let [a, b, c] = mesh.corners(f);
-    (a.min(b).min(c), a.max(b).max(c))
-}
-
-fn overlap(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
-    a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
-}
-
 /// Band faces `band` of `mesh` (closed: crown, band, root) whose free vertices (`movable`) may
 /// move: see the module doc. `min_angle_deg`: faces with a smaller angle are improved too.
 /// Rounds stop when nothing is left to fix or no move helps. Deterministic.
@@ -93,8 +85,23 @@ pub fn untangle_band(
     // A vertex whose every candidate lost is tried again only after a neighbour has moved: the
     // work per band face is bounded whatever the input.
     let mut stuck = vec![false; nm];
+    // After the first full count, only the pairs of the faces moved since are tested again.
+    let recount = Recount::new(mesh, band.clone(), scale, 8.0 * scale);
+    let mut changed: Vec<u32> = Vec::new();
+    let count = |mesh: &TriMesh, pairs: &[(u32, u32)], changed: &mut Vec<u32>, first: bool| {
+        changed.sort_unstable();
+        changed.dedup();
+        let out = if first {
+            None
+        } else {
+            recount.update(mesh, band.clone(), scale, pairs, changed)
+        };
+        changed.clear();
+        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale))
+    };
     for round in 0..4 {
-        let (pairs, bad) = find_bad(mesh, band.clone(), scale, min_angle_deg);
+        let pairs = count(mesh, &report.crossing_pairs, &mut changed, round == 0);
+        let bad = bad_faces(mesh, band.clone(), &pairs, min_angle_deg);
         if round == 0 {
             report.crossings_before = pairs.len();
             first_pairs = pairs.clone();
@@ -117,6 +124,7 @@ pub fn untangle_band(
             let k = (v - movable.start) as usize;
             if improve_vertex(mesh, v, &star[k], &grid, scale) {
                 moved += 1;
+                changed.extend_from_slice(&star[k]);
                 // Its neighbours may do better now.
                 for &f in &star[k] {
                     for w in mesh.triangles[f as usize] {
@@ -136,7 +144,7 @@ pub fn untangle_band(
     }
     if report.moves > 0 {
         // Recount after the last round's moves.
-        let pairs = find_bad(mesh, band, scale, min_angle_deg).0;
+        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false);
         report.crossings_after = pairs.len();
         report.crossing_pairs = pairs;
         // Within a round the grid does not follow the moves; should a late move have crossed
@@ -151,21 +159,20 @@ pub fn untangle_band(
     report
 }
 
-/// The band's bounding box grown by two band edges.
-fn band_region(mesh: &TriMesh, band: Range<usize>, scale: f64) -> (DVec3, DVec3) {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for f in band {
-        let (l, h) = bbox(mesh, f);
-        lo = lo.min(l);
-        hi = hi.max(h);
-    }
-    let grow = DVec3::splat(2.0 * scale);
-    (lo - grow, hi + grow)
-}
-
-/// The faces near the band (boxes meeting [`band_region`]), binned.
+/// The faces near the band (boxes meeting the band's box grown by two band edges), binned.
 fn near_grid(mesh: &TriMesh, band: Range<usize>, scale: f64) -> TriangleGrid {
-    let region = band_region(mesh, band, scale);
+    let region = {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for f in band {
+            let (l, h) = bbox(mesh, f);
+            lo = lo.min(l);
+            hi = hi.max(h);
+        }
+        (
+            lo - DVec3::splat(2.0 * scale),
+            hi + DVec3::splat(2.0 * scale),
+        )
+    };
     let near: Vec<u32> = (0..mesh.triangles.len())
         .filter(|&f| overlap(bbox(mesh, f), region))
         .map(|f| f as u32)
@@ -183,57 +190,30 @@ fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
     if n == 0 { 0.1 } else { sum / n as f64 }
 }
 
-/// Intersecting pairs with a band face (each once, `(smaller, larger)` face index, sorted) and the band faces to fix: in such a
-/// pair, or with an angle under `min_angle_deg`.
-fn find_bad(
+/// The band faces to fix: in a crossing pair of `pairs`, or with an angle under
+/// `min_angle_deg`.
+fn bad_faces(
     mesh: &TriMesh,
     band: Range<usize>,
-    scale: f64,
+    pairs: &[(u32, u32)],
     min_angle_deg: f64,
-) -> (Vec<(u32, u32)>, Vec<u32>) {
-    let region = band_region(mesh, band.clone(), scale);
-    let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
-    let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
-    // Band–band pairs, then band–other: faces in the band's cells.
-    let mut pairs = grid.candidate_pairs(mesh);
-    for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
-        let bg = bbox(mesh, g);
-        if !overlap(bg, region) {
-            continue;
-        }
-        grid.for_each_in_box(bg.0, bg.1, |f| {
-            if overlap(bbox(mesh, f as usize), bg) {
-                pairs.push((f, g as u32));
-            }
-        });
-    }
-    pairs.sort_unstable();
-    pairs.dedup();
+) -> Vec<u32> {
     let cos_limit = min_angle_deg.to_radians().cos();
     let mut hit = vec![false; band.len()];
-    let mut crossings = Vec::new();
-    for (f, g) in pairs {
-        if !triangles_intersect(mesh, f as usize, g as usize) {
-            continue;
-        }
-        crossings.push((f.min(g), f.max(g)));
+    for &(f, g) in pairs {
         for x in [f as usize, g as usize] {
             if band.contains(&x) {
                 hit[x - band.start] = true;
             }
         }
     }
-    let bad = band
-        .clone()
+    band.clone()
         .filter(|&f| {
             let [a, b, c] = mesh.corners(f);
             hit[f - band.start] || has_angle_under(a, b, c, cos_limit)
         })
         .map(|f| f as u32)
-        .collect();
-    crossings.sort_unstable();
-    crossings.dedup();
-    (crossings, bad)
+        .collect()
 }
 
 /// The faces around a star, split once per vertex: the other faces (which do not move while
