@@ -42,8 +42,11 @@ use toothfuse::pipeline::{self, PipelineOptions, PipelineResult, PipelineTiming,
 use toothfuse::register::correspondence::SurfaceIndex;
 use toothfuse::register::{Timing, register};
 
+/// Reads one stage's time (ms) from a registration's [`Timing`].
+type StageTime = fn(&Timing) -> f64;
+
 /// The registration stages read from [`Timing`], by benchmark name.
-const REGISTER_STAGES: [(&str, fn(&Timing) -> f64); 6] = [
+const REGISTER_STAGES: [(&str, StageTime); 6] = [
     ("reg_prepare", |t| t.prepare_ms),
     ("reg_gate", |t| t.gate_ms),
     ("reg_centroid", |t| t.centroid_ms),

@@ -6,6 +6,9 @@
 //! Included with `#[path]` by both targets (it lives in a subfolder so Cargo does not take it
 //! for a benchmark of its own).
 
+// Each including target uses a different part of this module.
+#![allow(dead_code)]
+
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use toothfuse::TriMesh;
