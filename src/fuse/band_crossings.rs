@@ -24,7 +24,7 @@ fn inside(a: (DVec3, DVec3), region: (DVec3, DVec3)) -> bool {
 }
 
 /// The band's bounding box grown by `grow`.
-fn band_region(mesh: &TriMesh, band: Range<usize>, grow: f64) -> (DVec3, DVec3) {
+pub(super) fn band_region(mesh: &TriMesh, band: Range<usize>, grow: f64) -> (DVec3, DVec3) {
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for f in band {
         let (l, h) = bbox(mesh, f);

@@ -7,7 +7,7 @@
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
 //! vertices (IOS margin, CBCT cut) never move.
 
-use super::band_crossings::{Recount, bbox, count_all, overlap};
+use super::band_crossings::{Recount, band_region, bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use crate::mesh::TriMesh;
 use crate::mesh_check::{TriangleGrid, triangles_intersect};
@@ -161,18 +161,7 @@ pub fn untangle_band(
 
 /// The faces near the band (boxes meeting the band's box grown by two band edges), binned.
 fn near_grid(mesh: &TriMesh, band: Range<usize>, scale: f64) -> TriangleGrid {
-    let region = {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for f in band {
-            let (l, h) = bbox(mesh, f);
-            lo = lo.min(l);
-            hi = hi.max(h);
-        }
-        (
-            lo - DVec3::splat(2.0 * scale),
-            hi + DVec3::splat(2.0 * scale),
-        )
-    };
+    let region = band_region(mesh, band, 2.0 * scale);
     let near: Vec<u32> = (0..mesh.triangles.len())
         .filter(|&f| overlap(bbox(mesh, f), region))
         .map(|f| f as u32)
