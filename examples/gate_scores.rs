@@ -8,6 +8,9 @@ use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 use toothfuse::register::{GateReport, RegisterOptions, register};
 
 fn stats(g: &GateReport) -> String {
+    if std::env::var_os("GATE_DEBUG").is_some() {
+        return format!("{g:?}");
+    }
     let mut tr: Vec<f64> = g.teeth.iter().map(|e| e.own_motion[0].length()).collect();
     tr.sort_by(f64::total_cmp);
     let mut e: Vec<_> = g.teeth.iter().collect();

@@ -109,6 +109,21 @@ impl SurfaceIndex {
         }
     }
 
+    /// Indices of the vertices at squared distance below `r2` from `q` (`(q - v)·(q - v) < r2`
+    /// exactly as glam computes it), in no particular order.
+    pub fn vertices_within(&self, q: DVec3, r2: f64) -> impl Iterator<Item = usize> + '_ {
+        // The tree's search radius is widened by a relative 1e-9 so that rounding in its own
+        // distance arithmetic cannot drop a vertex; the exact test below decides.
+        self.tree
+            .query(&q.to_array())
+            .within::<SquaredEuclidean<f64>>(r2 * (1.0 + 1e-9))
+            .unsorted()
+            .execute()
+            .into_iter()
+            .map(|n| n.item as usize)
+            .filter(move |&v| q.distance_squared(self.mesh.positions[v]) < r2)
+    }
+
     /// Closest point on the triangulated surface among the faces around the nearest vertex, with
     /// the face normal. Exact when the closest point lies in the nearest vertex's one-ring, which
     /// holds for queries within about an edge length of a well-shaped surface (ICP pairs); five

@@ -227,15 +227,16 @@ fn quick_fit(teeth: &[Pairing]) -> Option<(Rigid, f64)> {
             .iter()
             .zip(&dst)
             .map(|(t, &d)| {
-                let crown: Vec<DVec3> = t.ios.iter().map(|p| init.apply(*p)).collect();
-                let near: Vec<DVec3> = t
-                    .cbct
-                    .mesh()
-                    .positions
+                // The CBCT vertices within 2 mm of the mapped crown, summed in index order.
+                let mut near: Vec<usize> = t
+                    .ios
                     .iter()
-                    .copied()
-                    .filter(|v| crown.iter().any(|c| c.distance_squared(*v) < 4.0))
+                    .flat_map(|p| t.cbct.vertices_within(init.apply(*p), 4.0))
                     .collect();
+                near.sort_unstable();
+                near.dedup();
+                let positions = &t.cbct.mesh().positions;
+                let near: Vec<DVec3> = near.iter().map(|&v| positions[v]).collect();
                 if near.is_empty() { d } else { mean(&near) }
             })
             .collect();
