@@ -1,6 +1,8 @@
 //! The registration gate's scores on phantoms: each seed's own IOS and CBCT (valid) and the
 //! previous seed's IOS with this seed's CBCT (another patient). The figures of docs/errors.md.
 //!
+//! `GATE_DEBUG=1` prints each whole report (`{:?}`, full precision) instead of the summary.
+//!
 //! `cargo run --release --example gate_scores -- FIRST_SEED LAST_SEED JAW(0 upper, 1 lower)
 //! VARIANT(0 full, 1 missing, 2 partial, 3 metal, 4 drift)`
 use toothfuse::arch::Jaw;

@@ -164,14 +164,32 @@ fn fit_of(cbct: &SurfaceIndex, pts: &[DVec3], ios_to_cbct: &Rigid) -> f64 {
     )
 }
 
+/// How a fit's ICP ends besides its iteration budget.
+#[derive(Clone, Copy, PartialEq)]
+enum Stop {
+    /// Only when the step vanishes (the hypothesis as given, whose fit grades the data).
+    Converged,
+    /// Also when the median pair distance has dropped by less than [`STALL_DROP`] over the last
+    /// [`STALL_WINDOW`] iterations (competing hypotheses: only whether they fit clearly better
+    /// matters, and a fit that no longer improves has reached what it will show).
+    Stalled,
+}
+
+/// Iterations over which a competing hypothesis must improve its median pair distance.
+const STALL_WINDOW: usize = 3;
+/// Relative drop of the median pair distance over [`STALL_WINDOW`] iterations below which a
+/// competing hypothesis's ICP stops.
+const STALL_DROP: f64 = 0.01;
+
 /// Trimmed point-to-plane ICP (closest CBCT vertex, its normal) moving the IOS samples of
 /// `teeth` onto their CBCT teeth from `ios_to_cbct`; returns the final IOS → CBCT transform.
-fn icp(teeth: &[&Pairing], mut ios_to_cbct: Rigid, iterations: usize) -> Rigid {
+fn icp(teeth: &[&Pairing], mut ios_to_cbct: Rigid, iterations: usize, stop: Stop) -> Rigid {
     let all: Vec<DVec3> = teeth.iter().flat_map(|t| t.ios.iter().copied()).collect();
     if all.is_empty() {
         return ios_to_cbct;
     }
     let c0 = mean(&all);
+    let mut medians = Vec::with_capacity(iterations);
     for _ in 0..iterations {
         let center = ios_to_cbct.apply(c0);
         let per_tooth = crate::par::map_ordered(teeth, |t| {
@@ -190,7 +208,15 @@ fn icp(teeth: &[&Pairing], mut ios_to_cbct: Rigid, iterations: usize) -> Rigid {
                 .collect::<Vec<_>>()
         });
         let pairs = per_tooth.concat();
-        let cut = 3.0 * median(pairs.iter().map(|p| p.p.distance(p.q)).collect()) + 0.3;
+        let med = median(pairs.iter().map(|p| p.p.distance(p.q)).collect());
+        if stop == Stop::Stalled
+            && medians.len() >= STALL_WINDOW
+            && med > (1.0 - STALL_DROP) * medians[medians.len() - STALL_WINDOW]
+        {
+            break;
+        }
+        medians.push(med);
+        let cut = 3.0 * med + 0.3;
         let w: Vec<f64> = pairs
             .iter()
             .map(|p| if p.p.distance(p.q) <= cut { 1.0 } else { 0.0 })
@@ -213,7 +239,7 @@ fn icp(teeth: &[&Pairing], mut ios_to_cbct: Rigid, iterations: usize) -> Rigid {
 /// Centroid alignment (IOS sample centroid onto CBCT vertex centroid, keyed by tooth) then the
 /// trimmed ICP: the IOS → CBCT transform and the median over teeth of each tooth's median
 /// distance. `None` when the centroids are degenerate.
-fn quick_fit(teeth: &[Pairing]) -> Option<(Rigid, f64)> {
+fn quick_fit(teeth: &[Pairing], stop: Stop) -> Option<(Rigid, f64)> {
     let src: Vec<DVec3> = teeth.iter().map(|t| mean(&t.ios)).collect();
     let mut dst: Vec<DVec3> = teeth
         .iter()
@@ -243,7 +269,7 @@ fn quick_fit(teeth: &[Pairing]) -> Option<(Rigid, f64)> {
         init = kabsch(&src, &dst, None).ok()?;
     }
     let refs: Vec<&Pairing> = teeth.iter().collect();
-    let t = icp(&refs, init, JAW_ITERATIONS);
+    let t = icp(&refs, init, JAW_ITERATIONS, stop);
     let fit = median(teeth.iter().map(|p| fit_of(p.cbct, &p.ios, &t)).collect());
     Some((t, fit))
 }
@@ -280,7 +306,7 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
         })
         .collect();
     let mut report = GateReport::default();
-    let Some((t, fit)) = quick_fit(&given) else {
+    let Some((t, fit)) = quick_fit(&given, Stop::Converged) else {
         return Verdict {
             report,
             jaw: None,
@@ -296,7 +322,7 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
             ios: p.ios.iter().map(|v| DVec3::new(-v.x, v.y, v.z)).collect(),
         })
         .collect();
-    report.mirrored_fit_mm = quick_fit(&mirrored).map_or(f64::INFINITY, |r| r.1);
+    report.mirrored_fit_mm = quick_fit(&mirrored, Stop::Stalled).map_or(f64::INFINITY, |r| r.1);
     let mut shifted_best = (f64::INFINITY, 0);
     for step in [-1, 1] {
         let moved: Vec<Pairing> = given
@@ -311,7 +337,7 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
             })
             .collect();
         if moved.len() >= 3
-            && let Some((_, f)) = quick_fit(&moved)
+            && let Some((_, f)) = quick_fit(&moved, Stop::Stalled)
             && f < shifted_best.0
         {
             shifted_best = (f, step);
@@ -359,7 +385,7 @@ fn tooth_evidence(
             .filter_map(|s| along_arch(p.fdi, s))
             .filter_map(|f| Some((f, fit_of(&teeth.get(&f)?.cbct, &p.ios, t))))
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        let own = icp(&[&dense], *t, TOOTH_ITERATIONS);
+        let own = icp(&[&dense], *t, TOOTH_ITERATIONS, Stop::Converged);
         let c = mean(&p.ios);
         let own_motion = [DVec3::ZERO, DVec3::X * 5.0, DVec3::Y * 5.0]
             .map(|o| own.apply(c + o) - t.apply(c + o));
