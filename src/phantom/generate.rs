@@ -235,8 +235,10 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
         .collect();
     let cbct_refs: Vec<&PlacedTooth> = cbct_idx.iter().map(|&i| &teeth[i]).collect();
     let cbct_contacts = touching(&cbct_refs);
-    let mut cbct = BTreeMap::new();
-    for (k, &i) in cbct_idx.iter().enumerate() {
+    // Each tooth draws from its own fork of the CBCT stream: the teeth are simulated in parallel
+    // and the result does not depend on the thread count.
+    let order: Vec<(usize, usize)> = cbct_idx.iter().copied().enumerate().collect();
+    let simulated = crate::par::map_ordered(&order, |&(k, i)| {
         let t = &teeth[i];
         let mut trng = crng.fork(t.shape.fdi as u64);
         let metal = (sc.metal == Some(t.shape.fdi)).then(|| Metal::new(t, &mut trng));
@@ -265,25 +267,30 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             &realism.cbct,
             &mut trng,
         );
+        m.triangles.shrink_to_fit();
+        (t.shape.fdi, m)
+    });
+    let mut cbct = BTreeMap::new();
+    for (fdi, m) in simulated {
         if m.triangles.is_empty() {
             return Err(
                 crate::Error::WrongState("CBCT simulation produced no surface".into())
-                    .in_tooth(t.shape.fdi),
+                    .in_tooth(fdi),
             );
         }
-        m.triangles.shrink_to_fit();
-        cbct.insert(t.shape.fdi, m);
+        cbct.insert(fdi, m);
     }
 
     // Truth.
+    // Real anatomy: the caller's mesh, where it was; parametric: our mesh of the implicit (each
+    // tooth on its own, in parallel).
+    let surfaces = crate::par::map_ordered(&teeth, |t| match &opts.anatomy {
+        Some(a) => a[&t.shape.fdi].clone(),
+        None => true_surface(t, realism.truth_spacing),
+    });
     let mut truth_teeth = BTreeMap::new();
-    for (i, t) in teeth.iter().enumerate() {
+    for ((i, t), surface) in teeth.iter().enumerate().zip(surfaces) {
         let fdi = t.shape.fdi;
-        // Real anatomy: the caller's mesh, where it was; parametric: our mesh of the implicit.
-        let surface = match &opts.anatomy {
-            Some(a) => a[&fdi].clone(),
-            None => true_surface(t, realism.truth_spacing),
-        };
         let cbct_to_ios = world_to_ios
             .compose(&drift[i])
             .compose(&world_to_cbct.inverse());

@@ -263,10 +263,7 @@ pub fn simulate(
             punch_holes(&mut mesh, &mut labels, Some(&mut level), realism.holes, rng);
         }
         roughen(&mut mesh, &mut labels, level, &fdis, occ, h, r, rng);
-        let margins = teeth
-            .iter()
-            .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))
-            .collect();
+        let margins = true_margins(teeth, &gum);
         return (mesh, labels, margins);
     }
     // Small holes in random crowns.
@@ -285,11 +282,13 @@ pub fn simulate(
     }
     make_crowns_disks(&mesh, &mut labels, realism.holes > 0);
     untangle_crowns(&mesh, &mut labels, realism.holes > 0, 6);
-    let margins = teeth
-        .iter()
-        .map(|t| t.tooth.margin_against(120, &|p| gum.eval(p)))
-        .collect();
+    let margins = true_margins(teeth, &gum);
     (mesh, labels, margins)
+}
+
+/// Where the gingiva meets each tooth (120 points per tooth), the teeth in parallel.
+fn true_margins(teeth: &[IosTooth], gum: &Gingiva) -> Vec<Vec<DVec3>> {
+    crate::par::map_ordered(teeth, |t| t.tooth.margin_against(120, &|p| gum.eval(p)))
 }
 
 /// A scanner spreads its vertices evenly: no surface-nets slivers. Relaxes the vertices near
