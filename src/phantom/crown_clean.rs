@@ -25,8 +25,10 @@ pub fn untangle_crowns(
         let mut now_dirty = Vec::new();
         // Only the crowns relabeled in the last round can have changed.
         let check = |l: i32| l != 0 && dirty.as_ref().is_none_or(|d| d.contains(&l));
-        for (&l, sub) in subs.iter().filter(|(l, _)| check(**l)) {
-            let pairs = self_intersections(&sub.mesh);
+        // Each crown's crossings on its own (in parallel), gathered in label order.
+        let crowns: Vec<_> = subs.iter().filter(|(l, _)| check(**l)).collect();
+        let crossings = crate::par::map_ordered(&crowns, |(_, sub)| self_intersections(&sub.mesh));
+        for ((&l, sub), pairs) in crowns.into_iter().zip(crossings) {
             if !pairs.is_empty() {
                 now_dirty.push(l);
             }

@@ -294,11 +294,14 @@ fn true_margins(teeth: &[IosTooth], gum: &Gingiva) -> Vec<Vec<DVec3>> {
 /// A scanner spreads its vertices evenly: no surface-nets slivers. Relaxes the vertices near
 /// the teeth (the gingiva further away never becomes crown) on the field's surface.
 fn relax(mesh: &mut TriMesh, guard: &FoldGuard, field: &Field<'_>, h: f64) {
-    let near: Vec<Vec<usize>> = mesh
-        .positions
-        .iter()
-        .map(|&p| field.teeth_near(p, 2.0 * h))
-        .collect();
+    // The teeth near each vertex, in parallel over blocks of vertices (a pure function of each).
+    let blocks: Vec<&[DVec3]> = mesh.positions.chunks(4096).collect();
+    let near: Vec<Vec<usize>> = crate::par::map_ordered(&blocks, |b| {
+        b.iter()
+            .map(|&p| field.teeth_near(p, 2.0 * h))
+            .collect::<Vec<_>>()
+    })
+    .concat();
     let movable: Vec<bool> = near.iter().map(|n| !n.is_empty()).collect();
     relax_on_surface(
         mesh,
