@@ -54,105 +54,9 @@ impl Grid {
     /// its corners (same sign, so the surface is unaffected); other blocks are split in 8, down
     /// to single cells. `block` is the top-level block size in samples (a power of two).
     /// Finally forces the outer layer of samples outside.
-    pub fn fill(&mut self, block: usize, lipschitz: f64, mut f: impl FnMut(DVec3) -> f64) {
-        let [nx, ny, nz] = self.dims;
-        for v in &mut self.values {
-            *v = f32::NAN;
-        }
-        let b = block.max(1);
-        let mut k = 0;
-        while k + 1 < nz {
-            let mut j = 0;
-            while j + 1 < ny {
-                let mut i = 0;
-                while i + 1 < nx {
-                    let lo = [i, j, k];
-                    let hi = [
-                        (i + b).min(nx - 1),
-                        (j + b).min(ny - 1),
-                        (k + b).min(nz - 1),
-                    ];
-                    self.fill_block(lo, hi, lipschitz, &mut f);
-                    i += b;
-                }
-                j += b;
-            }
-            k += b;
-        }
-        for v in &mut self.values {
-            if v.is_nan() {
-                *v = self.h as f32;
-            }
-        }
+    pub fn fill(&mut self, block: usize, lipschitz: f64, f: impl Fn(DVec3) -> f64 + Sync) {
+        super::grid_fill::fill(self, block, lipschitz, &f);
         self.force_border_outside();
-    }
-
-    fn value_at(&mut self, i: usize, j: usize, k: usize, f: &mut impl FnMut(DVec3) -> f64) -> f64 {
-        let id = self.idx(i, j, k);
-        let v = self.values[id];
-        if v.is_nan() {
-            let nv = f(self.point(i, j, k));
-            self.values[id] = nv as f32;
-            nv
-        } else {
-            v as f64
-        }
-    }
-
-    fn fill_block(
-        &mut self,
-        lo: [usize; 3],
-        hi: [usize; 3],
-        lipschitz: f64,
-        f: &mut impl FnMut(DVec3) -> f64,
-    ) {
-        let corners: [f64; 8] = std::array::from_fn(|c| {
-            let i = if c & 1 == 0 { lo[0] } else { hi[0] };
-            let j = if c & 2 == 0 { lo[1] } else { hi[1] };
-            let k = if c & 4 == 0 { lo[2] } else { hi[2] };
-            (i, j, k)
-        })
-        .map(|(i, j, k)| self.value_at(i, j, k, f));
-        let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-        if ext.iter().all(|&e| e <= 1) {
-            return;
-        }
-        let half_diag =
-            0.5 * self.h * ((ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]) as f64).sqrt();
-        let same = corners.iter().all(|&v| v > 0.0) || corners.iter().all(|&v| v < 0.0);
-        if same && corners.iter().all(|v| v.abs() > lipschitz * half_diag) {
-            for k in lo[2]..=hi[2] {
-                let tz = (k - lo[2]) as f64 / ext[2].max(1) as f64;
-                for j in lo[1]..=hi[1] {
-                    let ty = (j - lo[1]) as f64 / ext[1].max(1) as f64;
-                    for i in lo[0]..=hi[0] {
-                        let id = self.idx(i, j, k);
-                        if self.values[id].is_nan() {
-                            let tx = (i - lo[0]) as f64 / ext[0].max(1) as f64;
-                            self.values[id] = trilinear(&corners, tx, ty, tz) as f32;
-                        }
-                    }
-                }
-            }
-            return;
-        }
-        let split = |a: usize| -> ([(usize, usize); 2], usize) {
-            let (l, h) = (lo[a], hi[a]);
-            if h - l >= 2 {
-                let m = (l + h) / 2;
-                ([(l, m), (m, h)], 2)
-            } else {
-                ([(l, h), (l, h)], 1)
-            }
-        };
-        let (sx, sy, sz) = (split(0), split(1), split(2));
-        for &(z0, z1) in &sz.0[..sz.1] {
-            for &(y0, y1) in &sy.0[..sy.1] {
-                for &(x0, x1) in &sx.0[..sx.1] {
-                    self.fill_block([x0, y0, z0], [x1, y1, z1], lipschitz, f);
-                }
-            }
-        }
     }
 
     /// Sets the outer layer of samples to a positive value, so the surface is closed.
@@ -291,7 +195,7 @@ impl Grid {
     }
 }
 
-fn trilinear(c: &[f64; 8], tx: f64, ty: f64, tz: f64) -> f64 {
+pub(super) fn trilinear(c: &[f64; 8], tx: f64, ty: f64, tz: f64) -> f64 {
     let l = |a: f64, b: f64, t: f64| a + (b - a) * t;
     let x00 = l(c[0], c[1], tx);
     let x10 = l(c[2], c[3], tx);

@@ -87,6 +87,7 @@ mod drift;
 mod generate;
 mod gingiva;
 mod grid;
+mod grid_fill;
 mod ios;
 mod layout;
 mod project;

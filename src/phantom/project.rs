@@ -6,7 +6,7 @@ use crate::mesh::TriMesh;
 use glam::DVec3;
 
 /// Closed manifold mesh of `{f < 0}` inside the box `[lo, hi]` at spacing `h`.
-pub fn mesh_implicit(lo: DVec3, hi: DVec3, h: f64, f: impl Fn(DVec3) -> f64) -> TriMesh {
+pub fn mesh_implicit(lo: DVec3, hi: DVec3, h: f64, f: impl Fn(DVec3) -> f64 + Sync) -> TriMesh {
     let mut g = Grid::covering(lo, hi, h, 2);
     g.fill(16, 2.0, &f);
     extract_closed(&mut g)
