@@ -21,7 +21,7 @@ use glam::DVec3;
 
 /// Wraps `d` into `(-period/2, period/2]`.
 pub(super) fn wrap(d: f64, period: f64) -> f64 {
-    d - period * (d / period).round()
+    d - period * crate::geom::round(d / period)
 }
 
 /// The chart's reference: a strongly smoothed copy of the margin, projected along the axis. A

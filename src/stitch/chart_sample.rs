@@ -138,7 +138,9 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
         }
     }
     // Candidates: a column-aligned hexagonal lattice inside the region, each with its size.
-    let mut cand: Vec<(f64, [f64; 2], f64)> = Vec::new(); // (priority, point, size)
+    // (priority, point, size, creation index: the tie-break that makes the unstable sort below
+    // order candidates exactly as a stable one)
+    let mut cand: Vec<(f64, [f64; 2], f64, u32)> = Vec::new();
     let mut y_lo = f64::INFINITY;
     let mut y_hi = f64::NEG_INFINITY;
     for (k, c) in cross.iter_mut().enumerate() {
@@ -176,17 +178,18 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
                     (false, false) => o.e_lower,
                     (false, true) => 0.5 * (o.e_upper + o.e_lower),
                 };
-                cand.push((1.0 - t, [xk, y], size));
+                cand.push((1.0 - t, [xk, y], size, cand.len() as u32));
             }
         }
     }
     if cand.is_empty() {
         return Vec::new();
     }
-    cand.sort_by(|a, b| {
+    cand.sort_unstable_by(|a, b| {
         a.0.total_cmp(&b.0)
             .then(a.1[0].total_cmp(&b.1[0]))
             .then(a.1[1].total_cmp(&b.1[1]))
+            .then(a.3.cmp(&b.3))
     });
     // Greedy acceptance against loop vertices, loop edges and accepted points.
     let cell = o.radius.max(o.clearance) * e_max;
@@ -215,7 +218,7 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
         }
     }
     let n_fixed = pts.len();
-    for &(_, p, e) in &cand {
+    for &(_, p, e, _) in &cand {
         let ok_pts = pgrid.near(p, |id| {
             let (q, eq) = pts[id as usize];
             let r = o.radius * 0.5 * (e + eq);

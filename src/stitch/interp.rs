@@ -65,7 +65,7 @@ pub fn interpolate_points(
             .execute();
         for r in found {
             let q = b[r.item as usize];
-            let dphi = q.phi - p.phi - (q.phi - p.phi).round();
+            let dphi = q.phi - p.phi - crate::geom::round(q.phi - p.phi);
             for j in 1..=k {
                 let t = j as f64 / (k + 1) as f64;
                 out.push(ParamPoint {

@@ -22,7 +22,7 @@ pub struct LoopParam {
 }
 
 fn wrap_half(x: f64) -> f64 {
-    x - x.round()
+    x - crate::geom::round(x)
 }
 
 /// Unwrapped angle sequence (radians) along a closed loop and its total winding.
