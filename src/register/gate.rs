@@ -32,6 +32,9 @@ use std::collections::BTreeMap;
 
 /// Largest number of IOS points per tooth the gate's fits use (deterministic stride sample).
 const SAMPLE: usize = 150;
+/// The competing hypotheses (mirrored, shifted) fit every `ALT_STRIDE`-th point of the sample:
+/// only a clearly better fit counts there, and a third of the points shows it as well.
+const ALT_STRIDE: usize = 3;
 /// ICP iterations of the quick jaw-wide fit.
 const JAW_ITERATIONS: usize = 25;
 /// ICP iterations of the independent per-tooth fit.
@@ -319,7 +322,12 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
         .map(|p| Pairing {
             fdi: p.fdi,
             cbct: p.cbct,
-            ios: p.ios.iter().map(|v| DVec3::new(-v.x, v.y, v.z)).collect(),
+            ios: p
+                .ios
+                .iter()
+                .step_by(ALT_STRIDE)
+                .map(|v| DVec3::new(-v.x, v.y, v.z))
+                .collect(),
         })
         .collect();
     report.mirrored_fit_mm = quick_fit(&mirrored, Stop::Stalled).map_or(f64::INFINITY, |r| r.1);
@@ -332,7 +340,7 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
                 Some(Pairing {
                     fdi: to,
                     cbct: &teeth.get(&to)?.cbct,
-                    ios: p.ios.clone(),
+                    ios: p.ios.iter().step_by(ALT_STRIDE).copied().collect(),
                 })
             })
             .collect();
