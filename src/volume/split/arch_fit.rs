@@ -95,6 +95,9 @@ pub struct ArchFit {
     pub runner_up_ratio: f64,
     /// Per crown, the share of its points within the inlier distance.
     pub crown_inlier_share: BTreeMap<u8, f64>,
+    /// The arch's occlusal-apical axis in the volume frame (the crowns' thinnest principal
+    /// axis, registered; unit, sign arbitrary).
+    pub up: DVec3,
 }
 
 /// Aligns the crowns to the target surface; `inlier_mm` is the distance below which a crown
@@ -104,28 +107,36 @@ pub(crate) fn fit_arch(
     target: &Target,
     inlier_mm: f64,
 ) -> Result<ArchFit> {
+    let rough = crown_samples(crowns, 500);
     let coarse = crown_samples(crowns, 1500);
     let fine = crown_samples(crowns, 12000);
-    if coarse.len() < 30 {
+    if rough.len() < 30 {
         return Err(Error::MissingData(format!(
             "the IOS crowns have only {} points: too few to register the arch",
-            coarse.len()
+            rough.len()
         )));
     }
     let starts = starts(&coarse, &target.points);
-    let tried = crate::par::map_ordered(&starts, |s| {
-        let pose = icp(&coarse, target, *s, 12, f64::INFINITY);
-        (pose, trimmed_rms(&coarse, target, &pose, 0.8))
+    let mut tried = crate::par::map_ordered(&starts, |s| {
+        let pose = icp(&rough, target, *s, 8, f64::INFINITY);
+        (pose, trimmed_rms(&rough, target, &pose, 0.8))
     });
-    let mut best = 0;
-    for (i, t) in tried.iter().enumerate() {
-        if t.1 < tried[best].1 {
-            best = i;
-        }
+    // The most promising starts refined further, then ranked again.
+    let mut order: Vec<usize> = (0..tried.len()).collect();
+    order.sort_by(|&a, &b| tried[a].1.total_cmp(&tried[b].1).then(a.cmp(&b)));
+    let refined = crate::par::map_ordered(&order[..4.min(order.len())], |&i| {
+        let pose = icp(&coarse, target, tried[i].0, 20, 3.0);
+        (i, pose, trimmed_rms(&coarse, target, &pose, 0.8))
+    });
+    for (i, pose, _) in &refined {
+        tried[*i] = (*pose, trimmed_rms(&rough, target, pose, 0.8));
     }
-    let pose = icp(&coarse, target, tried[best].0, 20, 3.0);
-    let pose = icp(&fine, target, pose, 30, 1.5).orthonormalized();
-    let own = trimmed_rms(&coarse, target, &pose, 0.8);
+    let best = refined
+        .iter()
+        .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))
+        .map_or(0, |r| r.0);
+    let pose = icp(&fine, target, tried[best].0, 30, 1.5).orthonormalized();
+    let own = trimmed_rms(&rough, target, &pose, 0.8);
     let centre = mean(coarse.iter().map(|s| s.p));
     let runner_up = tried
         .iter()
@@ -135,7 +146,10 @@ pub(crate) fn fit_arch(
         })
         .map(|t| t.1)
         .fold(f64::INFINITY, f64::min);
-    Ok(evidence(&fine, target, pose, inlier_mm, runner_up / own.max(1e-9)))
+    let mut fit = evidence(&fine, target, pose, inlier_mm, runner_up / own.max(1e-9));
+    let pts: Vec<DVec3> = coarse.iter().map(|s| s.p).collect();
+    fit.up = pose.rot * principal_frame(&pts).1.z_axis;
+    Ok(fit)
 }
 
 fn evidence(
@@ -167,6 +181,7 @@ fn evidence(
             .into_iter()
             .map(|(f, (a, n))| (f, a as f64 / n.max(1) as f64))
             .collect(),
+        up: DVec3::Z,
     }
 }
 
@@ -316,7 +331,11 @@ mod tests {
         assert_eq!(r.len(), 24);
         for (i, a) in r.iter().enumerate() {
             assert!((a.determinant() - 1.0).abs() < 1e-12);
-            assert!(r[..i].iter().all(|b| !(*a - *b).abs_diff_eq(DMat3::ZERO, 1e-9)));
+            assert!(
+                r[..i]
+                    .iter()
+                    .all(|b| !(*a - *b).abs_diff_eq(DMat3::ZERO, 1e-9))
+            );
         }
     }
 }

@@ -1,17 +1,15 @@
-//! Splitting a jaw's teeth mask into teeth: seeds from the registered IOS crowns, then a
-//! seeded watershed on the distance transform, run as a widest-path flood that keeps, for every
-//! voxel, the best two seeds of different teeth.
-//!
-//! The level of a path is the smallest distance-to-background along it (its narrowest
-//! passage); a voxel goes to the tooth whose seed reaches it by the widest path. Teeth touch
-//! through thin contacts, so a voxel inside a tooth is reached from its own crown by a wide
-//! path and from a neighbour only through a contact. Where two seeds reach a voxel at nearly
-//! the same level (the runner-up's level at least `contested_ratio` of the winner's), the
-//! assignment is contested: the mask gives no narrow passage to cut at.
+//! Splitting a jaw's teeth mask into teeth: seeds from the registered IOS crowns (the mask
+//! voxels inside each crown), then every other mask voxel goes to the crown it is nearest to
+//! along paths inside the mask, with sideways steps (across the arch's occlusal-apical axis)
+//! costing `lateral_weight` times their length: a root hangs under its crown, and two teeth
+//! meet only where the mask joins them. The flood keeps, for every voxel, the best two crowns;
+//! a voxel whose runner-up is within `margin` mm of the winner is contested (the mask and the
+//! crowns do not tell which tooth it belongs to).
 
 use super::arch_fit::Sample;
 use super::mask::{FACES, JawMask};
 use crate::mesh::{TriMesh, boundary_loops};
+use glam::{DMat3, DVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap};
@@ -71,55 +69,63 @@ pub(crate) fn seeds(mask: &JawMask, crowns: &BTreeMap<u8, TriMesh>, depth_mm: f6
     out
 }
 
-/// The result of the flood: per box voxel the winning and the runner-up tooth (0 = none) and
-/// the levels they reach it at.
+/// The result of the flood: per box voxel the nearest and the runner-up tooth (0 = none) and
+/// their path costs (mm).
 pub(crate) struct Flood {
     pub best: Vec<u8>,
-    pub best_level: Vec<f32>,
+    pub best_cost: Vec<f32>,
     pub second: Vec<u8>,
-    pub second_level: Vec<f32>,
+    pub second_cost: Vec<f32>,
 }
 
-/// The widest-path flood from `seeds` over the mask (face neighbours), widest first; a voxel
-/// is settled twice at most, by two different teeth. Seeds have unlimited width; the level
-/// of a path excludes its last voxel's own distance (so a surface voxel's level is that of the
-/// tissue behind it). Ties go to the smaller voxel index: the result is deterministic.
-pub(crate) fn flood(mask: &JawMask, dist: &[f32], seeds: &[u8]) -> Flood {
+/// Cost (mm) of a step to each face neighbour: its length with the part across `up` scaled by
+/// `lateral_weight` (roots run roughly along the occlusal-apical axis under their crowns, so a
+/// path that moves sideways is a path into another tooth).
+pub(crate) fn step_costs(mask: &JawMask, up: DVec3, lateral_weight: f64) -> [f32; 6] {
+    let lin = DMat3::from_mat4(mask.to_world);
+    let up = up.normalize_or_zero();
+    FACES.map(|f| {
+        let e = lin * DVec3::new(f[0] as f64, f[1] as f64, f[2] as f64);
+        let v = e.dot(up);
+        let lat = (e.length_squared() - v * v).max(0.0).sqrt();
+        (v * v + (lateral_weight * lat).powi(2)).sqrt() as f32
+    })
+}
+
+/// The in-mask shortest-path flood from `seeds` (face neighbours, step costs `costs`, cheapest
+/// first); a voxel is settled twice at most, by two different teeth. Ties go to the smaller
+/// voxel index: the result is deterministic.
+pub(crate) fn flood(mask: &JawMask, costs: &[f32; 6], seeds: &[u8]) -> Flood {
     let n = mask.inside.len();
     let mut f = Flood {
         best: vec![0; n],
-        best_level: vec![0.0; n],
+        best_cost: vec![0.0; n],
         second: vec![0; n],
-        second_level: vec![0.0; n],
+        second_cost: vec![0.0; n],
     };
-    let mut heap: BinaryHeap<(u32, Reverse<u32>, u8)> = BinaryHeap::new();
+    let mut heap: BinaryHeap<Reverse<(u32, u32, u8)>> = BinaryHeap::new();
     for (id, &s) in seeds.iter().enumerate() {
         if s != 0 {
-            heap.push((f32::INFINITY.to_bits(), Reverse(id as u32), s));
+            heap.push(Reverse((0f32.to_bits(), id as u32, s)));
         }
     }
-    while let Some((bits, Reverse(id), lab)) = heap.pop() {
+    while let Some(Reverse((bits, id, lab))) = heap.pop() {
         let id = id as usize;
-        let level = f32::from_bits(bits);
+        let cost = f32::from_bits(bits);
         if f.best[id] == 0 {
             f.best[id] = lab;
-            f.best_level[id] = level;
+            f.best_cost[id] = cost;
         } else if f.best[id] != lab && f.second[id] == 0 {
             f.second[id] = lab;
-            f.second_level[id] = level;
+            f.second_cost[id] = cost;
         } else {
             continue;
         }
-        let through = if seeds[id] == lab {
-            f32::INFINITY
-        } else {
-            level.min(dist[id])
-        };
-        for step in FACES {
-            let u = mask.step(id, step);
+        for (step, c) in FACES.iter().zip(costs) {
+            let u = mask.step(id, *step);
             let open = f.best[u] == 0 || (f.best[u] != lab && f.second[u] == 0);
             if mask.inside[u] && open {
-                heap.push((through.to_bits(), Reverse(u as u32), lab));
+                heap.push(Reverse(((cost + c).to_bits(), u as u32, lab)));
             }
         }
     }
@@ -146,13 +152,12 @@ impl ToothSplit {
     }
 }
 
-/// Per tooth, its voxel counts (contested voxels among those off the mask surface); and the
-/// number of mask voxels no seed reached.
+/// Per tooth, its voxel counts; and the number of mask voxels no seed reached.
 pub(crate) fn tally(
     mask: &JawMask,
     f: &Flood,
     seeds: &[u8],
-    contested_ratio: f32,
+    margin_mm: f32,
 ) -> (BTreeMap<u8, ToothSplit>, usize) {
     let mut teeth: BTreeMap<u8, ToothSplit> = BTreeMap::new();
     let mut rivals: BTreeMap<(u8, u8), usize> = BTreeMap::new();
@@ -172,13 +177,8 @@ pub(crate) fn tally(
             t.seed_voxels += 1;
             continue;
         }
-        // A surface voxel's level is capped by the surface layer it sits in, not by the
-        // tissue its label came through: judged by the voxels behind it.
-        if FACES.iter().any(|&s| !mask.inside[mask.step(id, s)]) {
-            continue;
-        }
         let b = f.second[id];
-        if b != 0 && f.second_level[id] >= contested_ratio * f.best_level[id] {
+        if b != 0 && f.second_cost[id] - f.best_cost[id] <= margin_mm {
             t.contested_voxels += 1;
             *rivals.entry((a, b)).or_default() += 1;
         }
@@ -197,8 +197,8 @@ mod tests {
     use super::*;
     use crate::volume::{Frame, LabelVolume};
 
-    /// Two boxes 10 voxels wide joined by a one-voxel bridge: seeded in each box, the flood
-    /// splits at the bridge and nothing is contested; with a thick join, voxels are contested.
+    /// Two boxes 10 voxels wide side by side along i (up = k), joined by a bridge `bridge`
+    /// voxels across; seeded at the top of each box.
     fn two_boxes(bridge: usize) -> (JawMask, Vec<u8>) {
         let dims = [24, 12, 12];
         let mut labels = vec![0u16; 24 * 12 * 12];
@@ -218,28 +218,34 @@ mod tests {
         let v = LabelVolume::with_spacing(dims, [0.25; 3], [0.0; 3], Frame::Lps, labels).unwrap();
         let m = JawMask::from_volume(&v, 4).unwrap();
         let mut s = vec![0u8; m.inside.len()];
-        s[m.idx(4, 6, 6)] = 41;
-        s[m.idx(20, 6, 6)] = 42;
+        for j in 2..10 {
+            s[m.idx(5, j, 10)] = 41;
+            s[m.idx(18, j, 10)] = 42;
+        }
         (m, s)
     }
 
     #[test]
-    fn flood_cuts_at_the_narrow_passage() {
+    fn flood_follows_the_up_axis_and_flags_ties() {
         let (m, s) = two_boxes(0);
-        let d = m.distance_mm();
-        let f = flood(&m, &d, &s);
-        assert_eq!(f.best[m.idx(2, 6, 6)], 41);
-        assert_eq!(f.best[m.idx(22, 6, 6)], 42);
-        assert_eq!(f.best[m.idx(10, 2, 2)], 41);
-        let (teeth, unreached) = tally(&m, &f, &s, 0.8);
+        let c = step_costs(&m, DVec3::Z, 3.0);
+        assert_eq!(c[4], 0.25);
+        assert!((c[0] - 0.75).abs() < 1e-6);
+        let f = flood(&m, &c, &s);
+        assert_eq!(f.best[m.idx(2, 6, 1)], 41);
+        assert_eq!(f.best[m.idx(22, 6, 1)], 42);
+        // The bridge voxel on 41's side is 41's.
+        assert_eq!(f.best[m.idx(11, 5, 5)], 41);
+        let (teeth, unreached) = tally(&m, &f, &s, 1.0);
         assert_eq!(unreached, 0);
         assert_eq!(teeth[&41].voxels + teeth[&42].voxels, m.count());
         assert!(teeth[&41].contested_share() < 0.02, "{:?}", teeth[&41]);
-        // A join as thick as the boxes: no passage to cut at, much of it contested.
+        // One solid block seeded at both ends of its top: the middle is contested.
         let (m, s) = two_boxes(10);
-        let f = flood(&m, &m.distance_mm(), &s);
-        let (teeth, _) = tally(&m, &f, &s, 0.8);
-        assert!(teeth[&41].contested_share() > 0.2, "{:?}", teeth[&41]);
+        let f = flood(&m, &c, &s);
+        let (teeth, _) = tally(&m, &f, &s, 1.0);
+        let share = teeth[&41].contested_share();
+        assert!(share > 0.03 && share < 0.3, "{:?}", teeth[&41]);
         assert_eq!(teeth[&41].contested_with, Some(42));
     }
 }

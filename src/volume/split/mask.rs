@@ -1,6 +1,5 @@
-//! One jaw's teeth mask cropped from a label volume: its occupancy, its surface (points on the
-//! mask's 0.5 level with outward normals) and the distance of each inside voxel to the
-//! background.
+//! One jaw's teeth mask cropped from a label volume: its occupancy and its surface (points on
+//! the mask's 0.5 level with outward normals).
 
 use crate::volume::LabelVolume;
 use glam::{DMat3, DMat4, DVec3};
@@ -82,12 +81,6 @@ impl JawMask {
             .transform_point3(DVec3::new(i as f64, j as f64, k as f64))
     }
 
-    /// Voxel size along i, j, k (mm).
-    pub fn spacing(&self) -> [f64; 3] {
-        let m = DMat3::from_mat4(self.to_world);
-        [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()]
-    }
-
     /// Number of inside voxels.
     #[cfg(test)]
     pub fn count(&self) -> usize {
@@ -144,75 +137,6 @@ impl JawMask {
         }
         g
     }
-
-    /// For every voxel, the distance (mm) from its centre to the nearest outside voxel centre
-    /// (0 outside): an exact Euclidean distance transform, separable along the axes, with the
-    /// voxel sizes of the axes.
-    pub fn distance_mm(&self) -> Vec<f32> {
-        let big = 1e18;
-        let mut d2: Vec<f64> = self
-            .inside
-            .iter()
-            .map(|&b| if b { big } else { 0.0 })
-            .collect();
-        let sp = self.spacing();
-        let strides = [1, self.dims[0], self.dims[0] * self.dims[1]];
-        let mut line = Vec::new();
-        let mut out = Vec::new();
-        for a in 0..3 {
-            let n = self.dims[a];
-            let s = strides[a];
-            for start in 0..d2.len() {
-                if (start / s) % n != 0 {
-                    continue;
-                }
-                line.clear();
-                line.extend((0..n).map(|x| d2[start + x * s]));
-                edt_1d(&line, sp[a], &mut out);
-                for (x, &v) in out.iter().enumerate() {
-                    d2[start + x * s] = v;
-                }
-            }
-        }
-        d2.iter().map(|&v| v.sqrt() as f32).collect()
-    }
-}
-
-/// The 1-D squared distance transform of sampled function `f` at spacing `h` (Felzenszwalb
-/// and Huttenlocher's lower envelope of parabolas): `out[q] = min_p (h·(q − p))² + f[p]`.
-fn edt_1d(f: &[f64], h: f64, out: &mut Vec<f64>) {
-    let n = f.len();
-    out.clear();
-    out.resize(n, 0.0);
-    let h2 = h * h;
-    let mut v = vec![0usize; n];
-    let mut z = vec![0f64; n + 1];
-    let mut k = 0usize;
-    z[0] = f64::NEG_INFINITY;
-    z[1] = f64::INFINITY;
-    let inter = |p: usize, q: usize| -> f64 {
-        let (pf, qf) = (p as f64, q as f64);
-        ((f[q] / h2 + qf * qf) - (f[p] / h2 + pf * pf)) / (2.0 * (qf - pf))
-    };
-    for q in 1..n {
-        let mut s = inter(v[k], q);
-        while s <= z[k] {
-            k -= 1;
-            s = inter(v[k], q);
-        }
-        k += 1;
-        v[k] = q;
-        z[k] = s;
-        z[k + 1] = f64::INFINITY;
-    }
-    k = 0;
-    for (q, o) in out.iter_mut().enumerate() {
-        while z[k + 1] < q as f64 {
-            k += 1;
-        }
-        let d = q as f64 - v[k] as f64;
-        *o = h2 * d * d + f[v[k]];
-    }
 }
 
 #[cfg(test)]
@@ -221,32 +145,31 @@ mod tests {
     use crate::volume::Frame;
 
     #[test]
-    fn distance_transform_is_exact_on_a_slab() {
-        // A slab 7 voxels thick along k (0.5 mm voxels): distances 0.5, 1.0, ... to the middle.
-        let dims = [21, 21, 11];
-        let mut labels = vec![0u16; 21 * 21 * 11];
-        for k in 2..9 {
-            for j in 0..21 {
-                for i in 0..21 {
-                    labels[i + 21 * (j + 21 * k)] = 4;
+    fn surface_points_lie_between_inside_and_outside_voxels() {
+        // A 7×7×7 cube of 0.3/0.3/0.5 mm voxels.
+        let dims = [9, 9, 9];
+        let mut labels = vec![0u16; 9 * 9 * 9];
+        for k in 1..8 {
+            for j in 1..8 {
+                for i in 1..8 {
+                    labels[i + 9 * (j + 9 * k)] = 4;
                 }
             }
         }
-        let v = LabelVolume::with_spacing(dims, [0.3, 0.3, 0.5], [0.0; 3], Frame::Lps, labels)
-            .unwrap();
+        let v =
+            LabelVolume::with_spacing(dims, [0.3, 0.3, 0.5], [0.0; 3], Frame::Lps, labels).unwrap();
         let m = JawMask::from_volume(&v, 4).unwrap();
-        assert_eq!(m.count(), 21 * 21 * 7);
-        let d = m.distance_mm();
-        // The box is the slab's box padded by one voxel: the slab is k = 1..=7 in the box.
-        assert_eq!(m.dims, [23, 23, 9]);
-        let at = |k: usize| d[m.idx(11, 11, k)];
-        assert_eq!(at(0), 0.0);
-        assert!((at(1) - 0.5).abs() < 1e-6 && (at(4) - 2.0).abs() < 1e-6);
-        // Along i the box is padded: the nearest outside voxel is the padding, 0.3 mm away.
-        assert!((d[m.idx(1, 11, 4)] - 0.3).abs() < 1e-6);
+        assert_eq!(m.dims, [9, 9, 9]);
+        assert_eq!(m.count(), 343);
         let (p, n) = m.surface_points();
-        assert_eq!(p.len(), n.len());
-        // Every surface point is half a voxel outside an inside voxel centre, normals unit.
+        // One point per boundary face: 6 sides of 7×7 faces.
+        assert_eq!(p.len(), 6 * 49);
         assert!(n.iter().all(|n| (n.length() - 1.0).abs() < 1e-9));
+        // The top face sits half a voxel above the top voxel centres (z = 7 × 0.5 + 0.25).
+        let top = p.iter().map(|q| q.z).fold(f64::MIN, f64::max);
+        assert!((top - 3.75).abs() < 1e-9, "{top}");
+        // Normals point outward: away from the cube's centre.
+        let c = DVec3::new(1.2, 1.2, 2.0);
+        assert!(p.iter().zip(&n).all(|(q, n)| (*q - c).dot(*n) > 0.0));
     }
 }

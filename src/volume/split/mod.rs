@@ -1,8 +1,8 @@
 //! Per-jaw teeth masks split into teeth by the IOS. Some CBCT segmenters (DentalSegmentator)
 //! give one teeth label per jaw (3 upper, 4 lower) and no tooth numbers. For each jaw with IOS
 //! crowns: the crowns are registered as one rigid arch to the jaw's mask surface
-//! ([`ArchFit`]), refused when the fit is not trustworthy; the mask is then split by a seeded
-//! watershed on its distance transform, seeded by the registered crowns (see `flood`); each
+//! ([`ArchFit`]), refused when the fit is not trustworthy; the mask is then split by a
+//! nearest-crown flood inside the mask, seeded by the registered crowns (see `flood`); each
 //! tooth carries a split confidence (the share of its voxels whose assignment is contested) and
 //! teeth whose split cannot be trusted are refused with the reason. The result is a per-tooth
 //! FDI label volume for [`crate::volume::surface_teeth`]; the registration here serves only
@@ -38,8 +38,11 @@ pub struct SplitOptions {
     pub min_crown_inlier_share: f64,
     /// Depth (mm) behind a crown's surface within which mask voxels seed its tooth.
     pub seed_depth_mm: f64,
-    /// A voxel is contested when its runner-up reaches it at this share of the winner's level.
-    pub contested_ratio: f64,
+    /// Cost of a sideways step (across the occlusal-apical axis) over an axial one, when
+    /// growing the teeth from their crowns.
+    pub lateral_weight: f64,
+    /// A voxel is contested when its runner-up's path is at most this much (mm) longer.
+    pub contested_margin_mm: f64,
     /// A tooth is refused above this share of contested voxels.
     pub max_contested_share: f64,
 }
@@ -48,12 +51,13 @@ impl Default for SplitOptions {
     fn default() -> Self {
         SplitOptions {
             inlier_mm: 1.0,
-            min_inlier_share: 0.6,
+            min_inlier_share: 0.75,
             max_rms_mm: 0.6,
             min_runner_up_ratio: 1.2,
             min_crown_inlier_share: 0.5,
             seed_depth_mm: 3.0,
-            contested_ratio: 0.8,
+            lateral_weight: 3.0,
+            contested_margin_mm: 1.0,
             max_contested_share: 0.25,
         }
     }
@@ -196,7 +200,11 @@ fn no_jaw_error(counts: &BTreeMap<u16, usize>, crowns: &BTreeMap<u8, TriMesh>) -
                 .into(),
         );
     }
-    let have = if classes == [3] { "upper (3)" } else { "lower (4)" };
+    let have = if classes == [3] {
+        "upper (3)"
+    } else {
+        "lower (4)"
+    };
     Error::InvalidArgument(format!(
         "the IOS crowns {fdis:?} are all of the other jaw: the volume has only the {have} teeth \
          class (is the IOS of the other jaw?)"
@@ -230,16 +238,23 @@ fn split_jaw(
             (*f, m)
         })
         .collect();
-    let dist = mask.distance_mm();
     let seeds = flood::seeds(&mask, &placed, opts.seed_depth_mm);
-    let f = flood::flood(&mask, &dist, &seeds);
-    let (mut teeth, unreached_voxels) = flood::tally(&mask, &f, &seeds, opts.contested_ratio as f32);
+    let costs = flood::step_costs(&mask, fit.up, opts.lateral_weight);
+    let f = flood::flood(&mask, &costs, &seeds);
+    let (mut teeth, unreached_voxels) =
+        flood::tally(&mask, &f, &seeds, opts.contested_margin_mm as f32);
     let refused = refuse(&fit, crowns, &mut teeth, opts);
     let labels = f
         .best
         .iter()
         .zip(&mask.inside)
-        .map(|(&b, &inside)| if inside && !refused.contains_key(&b) { b } else { 0 })
+        .map(|(&b, &inside)| {
+            if inside && !refused.contains_key(&b) {
+                b
+            } else {
+                0
+            }
+        })
         .collect();
     let split = JawSplit {
         jaw,
@@ -275,8 +290,12 @@ fn check_fit(fit: &ArchFit, name: &str, o: &SplitOptions) -> Result<()> {
         return Ok(());
     };
     Err(Error::RegistrationRejected(format!(
-        "the {name} IOS crowns do not fit the CBCT {name} teeth mask as one arch: {why} (is \
-         the IOS of the other jaw or another patient, or are its labels wrong?)"
+        "the {name} IOS crowns do not fit the CBCT {name} teeth mask as one arch: {why} \
+         [{:.0}% inliers, RMS {:.2} mm, runner-up ratio {:.2}] (is the IOS of the other jaw or \
+         another patient, or are its labels wrong?)",
+        100.0 * fit.inlier_share,
+        fit.rms_mm,
+        fit.runner_up_ratio
     )))
 }
 
