@@ -118,3 +118,24 @@ def test_fuse_a_demo_jaw_read_from_files():
     assert jaw.teeth == [t for t in teeth if t in set(np.unique(cbct.labels))]
     assert sorted(set(jaw.labels.tolist())) == jaw.teeth
     assert all(q["watertight"] for q in jaw.quality.values()), jaw.quality
+
+
+def test_per_jaw_volume_is_split_with_the_ios_added_first():
+    """A DentalSegmentator-style volume (3 upper teeth, 4 lower teeth) is split into teeth with
+    the IOS crowns the session holds: without them it is refused, naming what to do, and the
+    session keeps no CBCT tooth."""
+    labels = np.zeros((12, 12, 12), dtype=np.uint8)
+    labels[3:9, 3:9, 3:9] = 4
+    with toothfuse.Session() as s:
+        with pytest.raises(toothfuse.ToothfuseError) as e:
+            s.add_label_volume(labels, spacing=(0.5, 0.5, 0.5), origin=(0, 0, 0),
+                               scheme="dentalsegmentator")
+        assert e.value.status_name == "missing data"
+        assert "add the IOS teeth first" in str(e.value)
+        # With an IOS crown too small to register as an arch: refused, nothing added.
+        s.add_tooth(toothfuse.IOS, 36, CUBE, TRIS[2:])
+        with pytest.raises(toothfuse.ToothfuseError) as e:
+            s.add_label_volume(labels, spacing=(0.5, 0.5, 0.5), origin=(0, 0, 0),
+                               scheme="dentalsegmentator")
+        assert "too few to register the arch" in str(e.value)
+        assert s.teeth(toothfuse.CBCT) == []
