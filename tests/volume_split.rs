@@ -185,6 +185,42 @@ fn touching_teeth_are_split_at_their_contacts() {
 }
 
 #[test]
+fn a_tooth_missing_from_the_ios_is_not_swallowed_by_its_neighbour() {
+    let Some(vol) = mask(Jaw::Lower) else { return };
+    let (p, placed) = phantom(&vol, Jaw::Lower);
+    let grown = dilate(&placed, 2);
+    let merged = grown.relabeled(|l| if l != 0 { 4 } else { 0 });
+    let mut crowns = p.ios_crowns();
+    crowns.remove(&36);
+    let split = split_teeth(&merged, &crowns, &SplitOptions::default()).expect("split");
+    for line in split.summary() {
+        eprintln!("{line}");
+    }
+    let refused: Vec<u8> = split.refused().iter().map(|r| r.0).collect();
+    // Tooth 36's mask went to a neighbour, which is refused and named.
+    assert!(
+        refused.contains(&35) || refused.contains(&37),
+        "{refused:?}"
+    );
+    assert!(
+        split
+            .refused()
+            .iter()
+            .any(|r| r.1.contains("without an IOS crown")),
+        "{:?}",
+        split.refused()
+    );
+    // No split tooth holds much of 36.
+    let d = dice(&split.volume, &grown);
+    assert_eq!(split.volume.label_counts().get(&36), None);
+    for (l, v) in &d {
+        if *l != 36 {
+            eprintln!("tooth {l}: Dice {v:.3}");
+        }
+    }
+}
+
+#[test]
 fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
     let Some(vol) = mask(Jaw::Lower) else { return };
     let (p, placed) = phantom(&vol, Jaw::Lower);

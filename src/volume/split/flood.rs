@@ -143,6 +143,9 @@ pub struct ToothSplit {
     pub contested_voxels: usize,
     /// The tooth contesting most of them, if any.
     pub contested_with: Option<u8>,
+    /// Of them, voxels not under its crown (farther across the occlusal-apical axis than the
+    /// footprint allowance from every crown vertex).
+    pub outside_voxels: usize,
 }
 
 impl ToothSplit {
@@ -150,6 +153,52 @@ impl ToothSplit {
     pub fn contested_share(&self) -> f64 {
         self.contested_voxels as f64 / self.voxels.max(1) as f64
     }
+
+    /// Share of the tooth's voxels not under its crown.
+    pub fn outside_share(&self) -> f64 {
+        self.outside_voxels as f64 / self.voxels.max(1) as f64
+    }
+}
+
+/// Per box voxel, true when it lies more than `limit_mm` across `up` (horizontally) from
+/// every vertex of the crown of the tooth `best` gave it: mask not under its crown, such as a
+/// CBCT tooth without an IOS crown joined to a neighbour.
+pub(crate) fn outside_footprint(
+    mask: &JawMask,
+    best: &[u8],
+    crowns: &BTreeMap<u8, TriMesh>,
+    up: DVec3,
+    limit_mm: f64,
+) -> Vec<bool> {
+    let up = up.normalize_or_zero();
+    let flat = |p: DVec3| p - up * p.dot(up);
+    let trees: BTreeMap<u8, ImmutableKdTree<f64, 3>> = crowns
+        .iter()
+        .filter_map(|(f, m)| {
+            let pts: Vec<[f64; 3]> = m.positions.iter().map(|p| flat(*p).to_array()).collect();
+            ImmutableKdTree::<f64, 3>::new_from_slice(&pts)
+                .ok()
+                .map(|t| (*f, t))
+        })
+        .collect();
+    let slab = mask.dims[0] * mask.dims[1];
+    let slices: Vec<usize> = (0..mask.dims[2]).collect();
+    crate::par::map_ordered(&slices, |&k| {
+        (k * slab..(k + 1) * slab)
+            .map(|id| {
+                let Some(tree) = trees.get(&best[id]) else {
+                    return false;
+                };
+                let q = flat(mask.world(id)).to_array();
+                let d = tree
+                    .query(&q)
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                d.distance > limit_mm * limit_mm
+            })
+            .collect::<Vec<bool>>()
+    })
+    .concat()
 }
 
 /// Per tooth, its voxel counts; and the number of mask voxels no seed reached.
@@ -157,22 +206,23 @@ pub(crate) fn tally(
     mask: &JawMask,
     f: &Flood,
     seeds: &[u8],
+    outside: &[bool],
     margin_mm: f32,
 ) -> (BTreeMap<u8, ToothSplit>, usize) {
     let mut teeth: BTreeMap<u8, ToothSplit> = BTreeMap::new();
     let mut rivals: BTreeMap<(u8, u8), usize> = BTreeMap::new();
     let mut unreached = 0;
-    for id in 0..mask.inside.len() {
-        if !mask.inside[id] {
+    for (id, (&inside, &a)) in mask.inside.iter().zip(&f.best).enumerate() {
+        if !inside {
             continue;
         }
-        let a = f.best[id];
         if a == 0 {
             unreached += 1;
             continue;
         }
         let t = teeth.entry(a).or_default();
         t.voxels += 1;
+        t.outside_voxels += outside[id] as usize;
         if seeds[id] == a {
             t.seed_voxels += 1;
             continue;
@@ -236,14 +286,15 @@ mod tests {
         assert_eq!(f.best[m.idx(22, 6, 1)], 42);
         // The bridge voxel on 41's side is 41's.
         assert_eq!(f.best[m.idx(11, 5, 5)], 41);
-        let (teeth, unreached) = tally(&m, &f, &s, 1.0);
+        let none = vec![false; m.inside.len()];
+        let (teeth, unreached) = tally(&m, &f, &s, &none, 1.0);
         assert_eq!(unreached, 0);
         assert_eq!(teeth[&41].voxels + teeth[&42].voxels, m.count());
         assert!(teeth[&41].contested_share() < 0.02, "{:?}", teeth[&41]);
         // One solid block seeded at both ends of its top: the middle is contested.
         let (m, s) = two_boxes(10);
         let f = flood(&m, &c, &s);
-        let (teeth, _) = tally(&m, &f, &s, 1.0);
+        let (teeth, _) = tally(&m, &f, &s, &none, 1.0);
         let share = teeth[&41].contested_share();
         assert!(share > 0.03 && share < 0.3, "{:?}", teeth[&41]);
         assert_eq!(teeth[&41].contested_with, Some(42));

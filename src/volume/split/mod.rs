@@ -45,6 +45,11 @@ pub struct SplitOptions {
     pub contested_margin_mm: f64,
     /// A tooth is refused above this share of contested voxels.
     pub max_contested_share: f64,
+    /// A voxel is under its crown when within this distance (mm) across the occlusal-apical
+    /// axis of one of the crown's vertices.
+    pub footprint_mm: f64,
+    /// A tooth is refused above this share of voxels not under its crown.
+    pub max_outside_share: f64,
 }
 
 impl Default for SplitOptions {
@@ -59,6 +64,8 @@ impl Default for SplitOptions {
             lateral_weight: 3.0,
             contested_margin_mm: 1.0,
             max_contested_share: 0.25,
+            footprint_mm: 3.5,
+            max_outside_share: 0.2,
         }
     }
 }
@@ -111,9 +118,11 @@ impl SplitVolume {
                 out.push(match j.refused.get(fdi) {
                     Some(r) => format!("tooth {fdi}: refused: {r}"),
                     None => format!(
-                        "tooth {fdi}: split from the per-jaw mask, {} voxels, {:.1}% contested",
+                        "tooth {fdi}: split from the per-jaw mask, {} voxels, {:.1}% contested, \
+                         {:.1}% outside its crown's footprint",
                         t.voxels,
-                        100.0 * t.contested_share()
+                        100.0 * t.contested_share(),
+                        100.0 * t.outside_share()
                     ),
                 });
             }
@@ -241,8 +250,9 @@ fn split_jaw(
     let seeds = flood::seeds(&mask, &placed, opts.seed_depth_mm);
     let costs = flood::step_costs(&mask, fit.up, opts.lateral_weight);
     let f = flood::flood(&mask, &costs, &seeds);
-    let (mut teeth, unreached_voxels) =
-        flood::tally(&mask, &f, &seeds, opts.contested_margin_mm as f32);
+    let outside = flood::outside_footprint(&mask, &f.best, &placed, fit.up, opts.footprint_mm);
+    let margin = opts.contested_margin_mm as f32;
+    let (mut teeth, unreached_voxels) = flood::tally(&mask, &f, &seeds, &outside, margin);
     let refused = refuse(&fit, crowns, &mut teeth, opts);
     let labels = f
         .best
@@ -328,6 +338,14 @@ fn refuse(
                 t.contested_with
                     .map_or(String::new(), |w| format!(" with tooth {w}")),
                 100.0 * o.max_contested_share
+            ))
+        } else if t.outside_share() > o.max_outside_share {
+            Some(format!(
+                "{:.0}% of its voxels lie beyond {} mm sideways of its crown (limit {:.0}%): a \
+                 CBCT tooth without an IOS crown joined to it?",
+                100.0 * t.outside_share(),
+                o.footprint_mm,
+                100.0 * o.max_outside_share
             ))
         } else {
             None
