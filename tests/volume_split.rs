@@ -151,10 +151,12 @@ fn contacts(v: &LabelVolume) -> BTreeMap<(u16, u16), usize> {
     let [nx, ny, _] = v.dims;
     for (id, &a) in v.labels.iter().enumerate() {
         for u in [id + 1, id + nx, id + nx * ny] {
-            if let Some(&b) = v.labels.get(u) {
-                if a != 0 && b != 0 && a != b {
-                    *out.entry((a.min(b), a.max(b))).or_default() += 1;
-                }
+            if let Some(&b) = v.labels.get(u)
+                && a != 0
+                && b != 0
+                && a != b
+            {
+                *out.entry((a.min(b), a.max(b))).or_default() += 1;
             }
         }
     }
