@@ -180,10 +180,10 @@ fn touching_teeth_are_split_at_their_contacts() {
     eprintln!("Dice per tooth: {d:?}");
     assert!(split.refused().is_empty(), "{:?}", split.refused());
     assert_eq!(d.len(), 10);
-    // Measured: Dice 0.90-1.00, mean 0.945 (the roots of crowded incisors and premolars are
-    // where the split errs).
+    // Measured: Dice 0.907-1.000, mean 0.958 (the roots of crowded incisors, canines and
+    // premolars are where the split errs).
     let mean = d.values().sum::<f64>() / d.len() as f64;
-    assert!(d.values().all(|&v| v > 0.88) && mean > 0.93, "{d:?}");
+    assert!(d.values().all(|&v| v > 0.89) && mean > 0.945, "{d:?}");
 }
 
 #[test]
@@ -247,7 +247,8 @@ fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
         eprintln!("tooth {l}: Dice {v:.3}");
     }
     assert_eq!(d.len(), 10);
-    assert!(d.values().all(|&v| v > 0.9), "{d:?}");
+    // Measured: Dice 0.977-1.000.
+    assert!(d.values().all(|&v| v > 0.97), "{d:?}");
     // Deterministic bit for bit.
     let again = split_teeth(&merged, &crowns, &SplitOptions::default()).unwrap();
     assert_eq!(again.volume, split.volume);

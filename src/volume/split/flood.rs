@@ -69,6 +69,30 @@ pub(crate) fn seeds(mask: &JawMask, crowns: &BTreeMap<u8, TriMesh>, depth_mm: f6
     out
 }
 
+/// The long axis of a registered crown: from the centroid of its margin to the centroid of its
+/// vertices (a root continues the crown along it); `fallback` when the crown has no margin or
+/// the axis leans more than 45° from it.
+pub(crate) fn crown_axis(m: &TriMesh, fallback: DVec3) -> DVec3 {
+    let margin: Vec<DVec3> = boundary_loops(m)
+        .into_iter()
+        .flatten()
+        .map(|v| m.positions[v as usize])
+        .collect();
+    let (Some(c), Some(cm)) = (
+        crate::geom::centroid(&m.positions),
+        crate::geom::centroid(&margin),
+    ) else {
+        return fallback;
+    };
+    let axis = (c - cm).normalize_or_zero();
+    let fallback = fallback.normalize_or_zero();
+    if axis.dot(fallback).abs() < std::f64::consts::FRAC_1_SQRT_2 {
+        fallback
+    } else {
+        axis
+    }
+}
+
 /// The result of the flood: per box voxel the nearest and the runner-up tooth (0 = none) and
 /// their path costs (mm).
 pub(crate) struct Flood {
@@ -92,10 +116,10 @@ pub(crate) fn step_costs(mask: &JawMask, up: DVec3, lateral_weight: f64) -> [f32
     })
 }
 
-/// The in-mask shortest-path flood from `seeds` (face neighbours, step costs `costs`, cheapest
-/// first); a voxel is settled twice at most, by two different teeth. Ties go to the smaller
+/// The in-mask shortest-path flood from `seeds` (face neighbours, step costs `costs[tooth]`,
+/// cheapest first); a voxel is settled twice at most, by two different teeth. Ties go to the smaller
 /// voxel index: the result is deterministic.
-pub(crate) fn flood(mask: &JawMask, costs: &[f32; 6], seeds: &[u8]) -> Flood {
+pub(crate) fn flood(mask: &JawMask, costs: &[[f32; 6]], seeds: &[u8]) -> Flood {
     let n = mask.inside.len();
     let mut f = Flood {
         best: vec![0; n],
@@ -121,7 +145,7 @@ pub(crate) fn flood(mask: &JawMask, costs: &[f32; 6], seeds: &[u8]) -> Flood {
         } else {
             continue;
         }
-        for (step, c) in FACES.iter().zip(costs) {
+        for (step, c) in FACES.iter().zip(&costs[lab as usize]) {
             let u = mask.step(id, *step);
             let open = f.best[u] == 0 || (f.best[u] != lab && f.second[u] == 0);
             if mask.inside[u] && open {
@@ -278,9 +302,10 @@ mod tests {
     #[test]
     fn flood_follows_the_up_axis_and_flags_ties() {
         let (m, s) = two_boxes(0);
-        let c = step_costs(&m, DVec3::Z, 3.0);
-        assert_eq!(c[4], 0.25);
-        assert!((c[0] - 0.75).abs() < 1e-6);
+        let c1 = step_costs(&m, DVec3::Z, 3.0);
+        assert_eq!(c1[4], 0.25);
+        assert!((c1[0] - 0.75).abs() < 1e-6);
+        let c = vec![c1; 256];
         let f = flood(&m, &c, &s);
         assert_eq!(f.best[m.idx(2, 6, 1)], 41);
         assert_eq!(f.best[m.idx(22, 6, 1)], 42);

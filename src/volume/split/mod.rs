@@ -248,7 +248,11 @@ fn split_jaw(
         })
         .collect();
     let seeds = flood::seeds(&mask, &placed, opts.seed_depth_mm);
-    let costs = flood::step_costs(&mask, fit.up, opts.lateral_weight);
+    let mut costs = vec![flood::step_costs(&mask, fit.up, opts.lateral_weight); 256];
+    for (f, m) in &placed {
+        let axis = flood::crown_axis(m, fit.up);
+        costs[*f as usize] = flood::step_costs(&mask, axis, opts.lateral_weight);
+    }
     let f = flood::flood(&mask, &costs, &seeds);
     let outside = flood::outside_footprint(&mask, &f.best, &placed, fit.up, opts.footprint_mm);
     let margin = opts.contested_margin_mm as f32;
