@@ -64,6 +64,14 @@ fn phantom(vol: &LabelVolume, jaw: Jaw) -> (Phantom, LabelVolume) {
     (p, placed)
 }
 
+/// The lower-jaw phantom and its placed mask, built once for all tests of this file.
+fn lower() -> Option<(Phantom, LabelVolume)> {
+    static LOWER: std::sync::OnceLock<Option<(Phantom, LabelVolume)>> = std::sync::OnceLock::new();
+    LOWER
+        .get_or_init(|| mask(Jaw::Lower).map(|v| phantom(&v, Jaw::Lower)))
+        .clone()
+}
+
 /// Mean TRE (mm) over the fused teeth, the number fused, and whether all are watertight.
 fn fuse_and_measure(p: &Phantom, cbct: BTreeMap<u8, TriMesh>, what: &str) -> (f64, usize, bool) {
     let mut p = p.clone();
@@ -165,8 +173,7 @@ fn contacts(v: &LabelVolume) -> BTreeMap<(u16, u16), usize> {
 
 #[test]
 fn touching_teeth_are_split_at_their_contacts() {
-    let Some(vol) = mask(Jaw::Lower) else { return };
-    let (p, placed) = phantom(&vol, Jaw::Lower);
+    let Some((p, placed)) = lower() else { return };
     let grown = dilate(&placed, 2);
     let touching = contacts(&grown);
     eprintln!("teeth in contact after growing each by 2 voxels: {touching:?}");
@@ -188,8 +195,7 @@ fn touching_teeth_are_split_at_their_contacts() {
 
 #[test]
 fn a_tooth_missing_from_the_ios_is_not_swallowed_by_its_neighbour() {
-    let Some(vol) = mask(Jaw::Lower) else { return };
-    let (p, placed) = phantom(&vol, Jaw::Lower);
+    let Some((p, placed)) = lower() else { return };
     let grown = dilate(&placed, 2);
     let merged = grown.relabeled(|l| if l != 0 { 4 } else { 0 });
     let mut crowns = p.ios_crowns();
@@ -224,8 +230,7 @@ fn a_tooth_missing_from_the_ios_is_not_swallowed_by_its_neighbour() {
 
 #[test]
 fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
-    let Some(vol) = mask(Jaw::Lower) else { return };
-    let (p, placed) = phantom(&vol, Jaw::Lower);
+    let Some((p, placed)) = lower() else { return };
     let merged = placed.relabeled(|l| if l != 0 { 4 } else { 0 });
     let crowns = p.ios_crowns();
     let t0 = std::time::Instant::now();
@@ -274,8 +279,7 @@ fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
 
 #[test]
 fn crowns_of_the_other_jaw_or_another_arch_are_refused() {
-    let Some(vol) = mask(Jaw::Lower) else { return };
-    let (p, placed) = phantom(&vol, Jaw::Lower);
+    let Some((p, placed)) = lower() else { return };
     let merged = placed.relabeled(|l| if l != 0 { 4 } else { 0 });
     // Lower crowns numbered as upper teeth: the volume has no upper class.
     let renumbered: BTreeMap<u8, TriMesh> = p
