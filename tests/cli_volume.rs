@@ -262,6 +262,14 @@ fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
         err.contains("split: tooth 36: split from the per-jaw mask"),
         "{err}"
     );
+    let split: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("split.json")).unwrap()).unwrap();
+    let teeth = split["jaws"][0]["teeth"].as_array().unwrap();
+    assert_eq!(teeth.len(), 10);
+    for t in teeth {
+        assert!(t["refused"].is_null(), "{t}");
+        assert!(t["contested_share"].as_f64().unwrap() < 0.05, "{t}");
+    }
     let rep: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let fused = rep["teeth"].as_array().unwrap();

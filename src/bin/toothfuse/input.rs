@@ -59,6 +59,10 @@ pub struct InputArgs {
     pub accept_questionable: bool,
 }
 
+/// The IOS input, the CBCT teeth by FDI, and the split's JSON when the CBCT was a per-jaw
+/// volume split with the IOS.
+pub type Inputs = (Ios, BTreeMap<u8, TriMesh>, Option<String>);
+
 /// The IOS input: a labeled jaw or per-tooth crowns.
 pub enum Ios {
     /// One labeled jaw mesh (labels converted to FDI).
@@ -82,16 +86,17 @@ impl InputArgs {
         o
     }
 
-    /// Both inputs, or `None` for the synthetic jaw.
-    pub fn read(&self) -> Result<Option<(Ios, BTreeMap<u8, TriMesh>)>> {
+    /// Both inputs, or `None` for the synthetic jaw; with a per-jaw CBCT volume, also the split's
+    /// JSON.
+    pub fn read(&self) -> Result<Option<Inputs>> {
         let (Some(ios), Some(cbct)) = (&self.ios, &self.cbct) else {
             return Ok(None);
         };
         let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
         if toothfuse::io::is_volume_path(cbct) {
-            let teeth = self.read_volume_teeth(cbct, &ios)?;
+            let (teeth, split) = self.read_volume_teeth(cbct, &ios)?;
             eprintln!("{ios_note}");
-            return Ok(Some((ios, teeth)));
+            return Ok(Some((ios, teeth, split)));
         }
         let opts = TeethOptions {
             scheme: self.scheme(),
@@ -110,13 +115,17 @@ impl InputArgs {
             t.scheme.scheme.name(),
             t.scheme.reason
         );
-        Ok(Some((ios, t.teeth)))
+        Ok(Some((ios, t.teeth, None)))
     }
 
     /// The teeth of a CBCT label volume, surfaced in the --cbct-frame world (a per-jaw volume
     /// split with the IOS crowns first); skipped labels (fragments, non-tooth structures) and
     /// the split per tooth are named on stderr.
-    fn read_volume_teeth(&self, path: &Path, ios: &Ios) -> Result<BTreeMap<u8, TriMesh>> {
+    fn read_volume_teeth(
+        &self,
+        path: &Path,
+        ios: &Ios,
+    ) -> Result<(BTreeMap<u8, TriMesh>, Option<String>)> {
         let frame = Frame::from_name(&self.cbct_frame).unwrap_or_default();
         let mut scheme = VolumeScheme::from_name(&self.cbct_classes).unwrap_or_default();
         let vf = toothfuse::io::read_label_volume(path, frame)
@@ -131,10 +140,11 @@ impl InputArgs {
             );
             scheme = VolumeScheme::DentalSegmentator;
         }
+        let mut split = None;
         if scheme == VolumeScheme::DentalSegmentator {
-            vol = split_with_ios(&vol, ios)
+            let (v, json) = split_with_ios(&vol, ios)
                 .with_context(|| format!("splitting the teeth of {}", path.display()))?;
-            scheme = VolumeScheme::Fdi;
+            (vol, split, scheme) = (v, Some(json), VolumeScheme::Fdi);
         }
         let t = surface_teeth(&vol, scheme, &SurfaceOptions::default())
             .with_context(|| format!("surfacing the teeth of {}", path.display()))?;
@@ -151,13 +161,16 @@ impl InputArgs {
                 );
             }
         }
-        Ok(t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect())
+        Ok((
+            t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect(),
+            split,
+        ))
     }
 }
 
 /// The per-tooth FDI volume split from a per-jaw volume with the IOS crowns; the split per
-/// tooth (contested share or why refused) on stderr.
-fn split_with_ios(vol: &LabelVolume, ios: &Ios) -> Result<LabelVolume> {
+/// tooth (contested share or why refused) on stderr; and the split's JSON.
+fn split_with_ios(vol: &LabelVolume, ios: &Ios) -> Result<(LabelVolume, String)> {
     let crowns = match ios {
         Ios::Jaw(lm) => toothfuse::fuse::ios_crowns(lm)?,
         Ios::Crowns(c) => c.clone(),
@@ -178,7 +191,8 @@ fn split_with_ios(vol: &LabelVolume, ios: &Ios) -> Result<LabelVolume> {
     for line in split.summary() {
         eprintln!("split: {line}");
     }
-    Ok(split.volume)
+    let json = split.to_json();
+    Ok((split.volume, json))
 }
 
 /// The IOS input and a line saying which labels and numbering were used.

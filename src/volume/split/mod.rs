@@ -110,6 +110,41 @@ impl SplitVolume {
         v
     }
 
+    /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested and
+    /// outside-footprint shares and, when refused, the reason (`null` otherwise).
+    pub fn to_json(&self) -> String {
+        let jaws: Vec<serde_json::Value> = self
+            .jaws
+            .iter()
+            .map(|j| {
+                let teeth: Vec<serde_json::Value> = j
+                    .teeth
+                    .iter()
+                    .map(|(fdi, t)| {
+                        serde_json::json!({
+                            "fdi": fdi,
+                            "voxels": t.voxels,
+                            "contested_share": t.contested_share(),
+                            "outside_share": t.outside_share(),
+                            "refused": j.refused.get(fdi),
+                        })
+                    })
+                    .collect();
+                serde_json::json!({
+                    "jaw": jaw_name(j.jaw),
+                    "label": j.label,
+                    "fit_inlier_share": j.fit.inlier_share,
+                    "fit_rms_mm": j.fit.rms_mm,
+                    "fit_runner_up_ratio": finite_or_null(j.fit.runner_up_ratio),
+                    "unreached_voxels": j.unreached_voxels,
+                    "teeth": teeth,
+                })
+            })
+            .collect();
+        let v = serde_json::json!({ "jaws": jaws, "notes": self.notes });
+        serde_json::to_string_pretty(&v).unwrap_or_default()
+    }
+
     /// One line per split tooth: its contested share, or why it was refused.
     pub fn summary(&self) -> Vec<String> {
         let mut out = Vec::new();
@@ -129,6 +164,10 @@ impl SplitVolume {
         }
         out
     }
+}
+
+fn finite_or_null(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
 }
 
 fn jaw_name(j: Jaw) -> &'static str {
