@@ -56,9 +56,9 @@ impl Default for SplitOptions {
     fn default() -> Self {
         SplitOptions {
             inlier_mm: 1.0,
-            min_inlier_share: 0.75,
-            max_rms_mm: 0.6,
-            min_runner_up_ratio: 1.2,
+            min_inlier_share: 0.85,
+            max_rms_mm: 0.4,
+            min_runner_up_ratio: 1.5,
             min_crown_inlier_share: 0.5,
             seed_depth_mm: 3.0,
             lateral_weight: 3.0,
