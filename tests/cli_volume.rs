@@ -293,6 +293,20 @@ fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
     let mean = tre.iter().sum::<f64>() / tre.len() as f64;
     eprintln!("CLI fuse from a per-jaw mask split by the IOS: mean TRE {mean:.3} mm");
     assert!(mean < 0.1, "mean TRE {mean} ({tre:?})");
+    // Without --cbct-classes the classes are detected and split the same way (register only).
+    let o = tf(&[
+        "register",
+        "--ios",
+        ios.to_str().unwrap(),
+        "--cbct",
+        nrrd.to_str().unwrap(),
+        "--out",
+        d.join("register.json").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("look like DentalSegmentator classes"), "{err}");
+    assert!(err.contains("split: tooth 44: split"), "{err}");
     // The same IOS numbered as upper teeth: refused, naming the cause.
     let upper: Vec<i32> = labels
         .iter()
