@@ -427,3 +427,6 @@ fn assemble(vol: &LabelVolume, done: &[Done]) -> LabelVolume {
     }
     out
 }
+
+#[cfg(test)]
+mod tests;
