@@ -1,11 +1,45 @@
 //! Surfacing CBCT teeth from a label volume: the STS 2024 mask (../shared/data/real, 0.25 mm,
 //! 18 teeth of both jaws), one jaw and both, read once outside the timing. Target: a full jaw
-//! well under a second. Skipped with a message when the real data is absent.
+//! well under a second. And splitting the mask's lower teeth merged into one per-jaw class
+//! (DentalSegmentator style) with the IOS crowns of a phantom built on them (built outside the
+//! timing). Skipped with a message when the real data is absent.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use toothfuse::io::read_label_volume;
-use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
+use toothfuse::volume::{
+    Frame, LabelVolume, SplitOptions, SurfaceOptions, VolumeScheme, split_teeth, surface_teeth,
+};
+
+/// The lower teeth merged into class 4 and the IOS crowns of a phantom built on them.
+fn per_jaw_lower(
+    both: &LabelVolume,
+) -> (
+    LabelVolume,
+    std::collections::BTreeMap<u8, toothfuse::TriMesh>,
+) {
+    let lower = both
+        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
+        .cropped_to_labels();
+    let anatomy = surface_teeth(&lower, VolumeScheme::Fdi, &SurfaceOptions::default())
+        .expect("teeth")
+        .teeth
+        .into_iter()
+        .map(|(f, t)| (f, t.mesh))
+        .collect();
+    let p = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
+        seed: 5,
+        jaw: toothfuse::arch::Jaw::Lower,
+        variant: toothfuse::phantom::Variant::Full,
+        anatomy: Some(anatomy),
+        ..Default::default()
+    })
+    .expect("phantom");
+    (
+        lower.relabeled(|l| if l != 0 { 4 } else { 0 }),
+        p.ios_crowns(),
+    )
+}
 
 fn bench_volume(c: &mut Criterion) {
     let Some(dir) = toothfuse::io::real_data_dir() else {
@@ -27,6 +61,11 @@ fn bench_volume(c: &mut Criterion) {
     });
     g.bench_function("surface_sts_both_jaws", |b| {
         b.iter(|| black_box(surface_teeth(&both, VolumeScheme::Fdi, &opts).expect("teeth")))
+    });
+    let (merged, crowns) = per_jaw_lower(&both);
+    let split = SplitOptions::default();
+    g.bench_function("split_sts_lower_jaw_by_ios", |b| {
+        b.iter(|| black_box(split_teeth(&merged, &crowns, &split).expect("split")))
     });
     g.bench_function("read_sts_nifti_gz", |b| {
         b.iter(|| black_box(read_label_volume(&p, Frame::Lps).expect("read")))

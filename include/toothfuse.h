@@ -604,6 +604,12 @@ typedef uint32_t toothfuse_volume_scheme;
  */
 #define TOOTHFUSE_VOLUME_SCHEME_TOOTHFAIRY2 2
 
+/**
+ * DentalSegmentator: one label per jaw (3 upper teeth, 4 lower teeth; 1, 2, 5 bones and canal
+ * ignored), split into teeth with the IOS teeth already added to the session.
+ */
+#define TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR 3
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -1311,13 +1317,21 @@ uint32_t toothfuse_abi_version(void);
  *   doubles, mm, negative flips an axis) and `origin` (3 doubles, world position of voxel 0's
  *   centre) give an axis-aligned grid; both must then be non-NULL.
  * - `labels`: `label_count` (= dims[0]*dims[1]*dims[2]) values of `label_type`, aligned for it.
- * - `scheme`: the numbering of the label values.
+ * - `scheme`: the numbering of the label values. With TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR
+ *   (one teeth label per jaw, no tooth numbers) the IOS teeth must be added first: each jaw's
+ *   IOS crowns are registered as one arch to its teeth mask, the mask is split into teeth
+ *   grown from the registered crowns, and each tooth is surfaced and added. Teeth whose split
+ *   cannot be trusted are not added; after a registration or fusion each tooth's split (its
+ *   share of contested voxels, or why it was refused) is among its warnings (registered teeth)
+ *   or in its skipped reason.
  * - `teeth_added_out`: when not NULL, receives the number of teeth added (on success only).
  *
  * Fails with NULL_PARAMETER, INVALID_ARGUMENT (count mismatch, bad matrix, negative label, a
  * label the scheme does not know, two labels for one tooth, a DentalSegmentator-style per-jaw
- * volume), UNIT_MISMATCH (voxel size outside 0.001-10 mm) or MISSING_DATA (no tooth label);
- * the message names the label or voxel.
+ * volume under another scheme, IOS crowns of the other jaw only), UNIT_MISMATCH (voxel size
+ * outside 0.001-10 mm), MISSING_DATA (no tooth label; no IOS teeth for a per-jaw volume) or
+ * REGISTRATION_REJECTED (the IOS arch does not fit the per-jaw mask, or no tooth's split can
+ * be trusted); the message names the label, voxel, jaw or tooth.
  *
  * # Safety
  * `session` must be NULL or a live session; the pointers must be NULL or hold the documented

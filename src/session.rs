@@ -98,6 +98,8 @@ pub struct Session {
     cut: Option<PipelineCut>,
     fused: Option<Fused>,
     notes: Notes,
+    /// Per tooth, the split of the last per-jaw label volume (added to the notes).
+    split_notes: BTreeMap<u8, String>,
 }
 
 impl Session {

@@ -176,3 +176,147 @@ fn fuse_from_the_sts_mask_file() {
     );
     assert!(mean < 0.1, "mean TRE {mean} ({tre:?})");
 }
+
+/// A raw little-endian uint16 NRRD of `v` (LPS world).
+fn write_nrrd(path: &std::path::Path, v: &toothfuse::volume::LabelVolume) {
+    let m = v.voxel_to_world;
+    let dir = |c: glam::DVec4| format!("({},{},{})", c.x, c.y, c.z);
+    let mut out = format!(
+        "NRRD0004\ntype: uint16\ndimension: 3\nspace: left-posterior-superior\nsizes: {} {} {}\n\
+         space directions: {} {} {}\nkinds: domain domain domain\nencoding: raw\nendian: little\n\
+         space origin: {}\n\n",
+        v.dims[0],
+        v.dims[1],
+        v.dims[2],
+        dir(m.x_axis),
+        dir(m.y_axis),
+        dir(m.z_axis),
+        dir(m.w_axis)
+    )
+    .into_bytes();
+    out.extend(v.labels.iter().flat_map(|l| l.to_le_bytes()));
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
+    let Some(dir) = toothfuse::io::real_data_dir() else {
+        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
+        return;
+    };
+    let mask = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
+    if !mask.exists() {
+        eprintln!("SKIPPED: {} not found", mask.display());
+        return;
+    }
+    // The mask's lower teeth as the phantom's anatomy; the file holds them merged into
+    // DentalSegmentator's lower teeth class (4) in the same LPS world.
+    let vol = toothfuse::io::read_label_volume(&mask, Frame::Lps)
+        .unwrap()
+        .volume
+        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
+        .cropped_to_labels();
+    let teeth = surface_teeth(&vol, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap();
+    let anatomy: BTreeMap<u8, TriMesh> = teeth
+        .teeth
+        .iter()
+        .map(|(f, t)| (*f, t.mesh.clone()))
+        .collect();
+    let p = Phantom::generate(&PhantomOptions {
+        seed: 3,
+        jaw: Jaw::Lower,
+        variant: Variant::Full,
+        anatomy: Some(anatomy),
+        ..Default::default()
+    })
+    .unwrap();
+    let d = tmp("split");
+    let nrrd = d.join("dentalsegmentator.nrrd");
+    write_nrrd(&nrrd, &vol.relabeled(|l| if l != 0 { 4 } else { 0 }));
+    let labels = p.ios.vertex_labels.clone().unwrap();
+    let ios = d.join("ios.ply");
+    toothfuse::io::write_mesh(&ios, &p.ios.mesh, &[("label", &labels)]).unwrap();
+    let out = d.join("out");
+    let args = |ios: &std::path::Path| {
+        let v: Vec<String> = [
+            "fuse",
+            "--ios",
+            ios.to_str().unwrap(),
+            "--cbct",
+            nrrd.to_str().unwrap(),
+            "--cbct-classes",
+            "dentalsegmentator",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v
+    };
+    let a = args(&ios);
+    let o = tf(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("split: tooth 36: split from the per-jaw mask"),
+        "{err}"
+    );
+    let split: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("split.json")).unwrap()).unwrap();
+    let teeth = split["jaws"][0]["teeth"].as_array().unwrap();
+    assert_eq!(teeth.len(), 10);
+    for t in teeth {
+        assert!(t["refused"].is_null(), "{t}");
+        assert!(t["contested_share"].as_f64().unwrap() < 0.05, "{t}");
+    }
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let fused = rep["teeth"].as_array().unwrap();
+    let fdis: Vec<u64> = fused.iter().map(|t| t["fdi"].as_u64().unwrap()).collect();
+    assert_eq!(fdis, vec![31, 32, 33, 35, 36, 37, 41, 42, 43, 44]);
+    let mut tre = Vec::new();
+    for t in fused {
+        assert!(t["watertight"].as_bool().unwrap(), "{t}");
+        let fdi = t["fdi"].as_u64().unwrap() as u8;
+        let m: Vec<f64> = t["ios_to_output"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let ios_to_cbct = Rigid::from_row_major(&m.try_into().unwrap());
+        let w2c = p.truth.world_to_cbct;
+        let est = ios_to_cbct.inverse().compose(&w2c.inverse());
+        tre.push(p.truth.teeth[&fdi].tre(&w2c, &est));
+    }
+    let mean = tre.iter().sum::<f64>() / tre.len() as f64;
+    eprintln!("CLI fuse from a per-jaw mask split by the IOS: mean TRE {mean:.3} mm");
+    assert!(mean < 0.1, "mean TRE {mean} ({tre:?})");
+    // Without --cbct-classes the classes are detected and split the same way (register only).
+    let o = tf(&[
+        "register",
+        "--ios",
+        ios.to_str().unwrap(),
+        "--cbct",
+        nrrd.to_str().unwrap(),
+        "--out",
+        d.join("register.json").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("look like DentalSegmentator classes"), "{err}");
+    assert!(err.contains("split: tooth 44: split"), "{err}");
+    // The same IOS numbered as upper teeth: refused, naming the cause.
+    let upper: Vec<i32> = labels
+        .iter()
+        .map(|&l| if l > 0 { l - 20 } else { 0 })
+        .collect();
+    let ios_up = d.join("ios_upper.ply");
+    toothfuse::io::write_mesh(&ios_up, &p.ios.mesh, &[("label", &upper)]).unwrap();
+    let a = args(&ios_up);
+    let o = tf(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("other jaw"), "{err}");
+}

@@ -277,3 +277,129 @@ fn errors_name_the_fault_and_keep_the_session() {
     assert_eq!(st, toothfuse_status::NullParameter);
     assert_eq!(added, 1, "written only on success");
 }
+
+#[test]
+fn per_jaw_volume_needs_the_ios_first() {
+    let s = Session::new();
+    let mut v = ball(0);
+    for x in v.iter_mut().step_by(7) {
+        *x = 4;
+    }
+    let mut added = 0usize;
+    let st = add(
+        &s,
+        &[N; 3],
+        None,
+        v.as_ptr().cast(),
+        v.len(),
+        3,
+        3,
+        &mut added,
+    );
+    assert_eq!(st, toothfuse_status::MissingData);
+    assert!(
+        s.error().contains("add the IOS teeth first"),
+        "{}",
+        s.error()
+    );
+    let st = add(
+        &s,
+        &[N; 3],
+        None,
+        v.as_ptr().cast(),
+        v.len(),
+        3,
+        4,
+        &mut added,
+    );
+    assert_eq!(st, toothfuse_status::InvalidArgument);
+    assert!(s.error().contains("DENTALSEGMENTATOR (3)"), "{}", s.error());
+    assert!(s.teeth(TOOTHFUSE_MODALITY_CBCT).is_empty());
+}
+
+/// The STS 2024 mask's lower teeth merged into DentalSegmentator's lower teeth class, added
+/// after the IOS crowns of a phantom built on them: every tooth split and added, and after a
+/// registration each tooth's split among its warnings. Skipped when the real data is absent.
+#[test]
+fn per_jaw_volume_split_with_the_held_ios_crowns() {
+    use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
+    let Some(dir) = toothfuse::io::real_data_dir() else {
+        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
+        return;
+    };
+    let p = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
+    if !p.exists() {
+        eprintln!("SKIPPED: {} not found", p.display());
+        return;
+    }
+    let vol = toothfuse::io::read_label_volume(&p, Frame::Lps)
+        .unwrap()
+        .volume
+        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
+        .cropped_to_labels();
+    let anatomy = surface_teeth(&vol, VolumeScheme::Fdi, &SurfaceOptions::default())
+        .unwrap()
+        .teeth
+        .into_iter()
+        .map(|(f, t)| (f, t.mesh))
+        .collect();
+    let ph = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
+        seed: 5,
+        jaw: toothfuse::arch::Jaw::Lower,
+        variant: toothfuse::phantom::Variant::Full,
+        anatomy: Some(anatomy),
+        ..Default::default()
+    })
+    .unwrap();
+    let s = Session::new();
+    for (fdi, m) in ph.ios_crowns() {
+        let v: Vec<f64> = m.positions.iter().flat_map(|p| p.to_array()).collect();
+        let t: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        assert_eq!(
+            s.add(TOOTHFUSE_MODALITY_IOS, fdi as i32, &v, &t),
+            toothfuse_status::Ok
+        );
+    }
+    let labels: Vec<u16> = vol
+        .labels
+        .iter()
+        .map(|&l| if l != 0 { 4 } else { 0 })
+        .collect();
+    let m = vol.voxel_to_world.transpose().to_cols_array();
+    let mut added = 0usize;
+    let st = add(
+        &s,
+        &vol.dims,
+        Some(&m),
+        labels.as_ptr().cast(),
+        labels.len(),
+        1,
+        3,
+        &mut added,
+    );
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    assert_eq!(added, 10);
+    // SAFETY: a live session; NULL options = defaults.
+    let st = unsafe { toothfuse_session_register(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    let mut warnings = Vec::new();
+    for i in 0.. {
+        let mut w: *const std::ffi::c_char = ptr::null();
+        // SAFETY: a live session and a writable pointer.
+        if unsafe { toothfuse_session_tooth_warning(s.0, 36, i, &mut w) } != toothfuse_status::Ok {
+            break;
+        }
+        // SAFETY: a NUL-terminated string borrowed from the session.
+        warnings.push(
+            unsafe { std::ffi::CStr::from_ptr(w) }
+                .to_string_lossy()
+                .into_owned(),
+        );
+    }
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("split from the per-jaw teeth mask") && w.contains("contested")),
+        "{warnings:?}"
+    );
+}

@@ -224,3 +224,42 @@ fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
         "lower teeth {cl} should be anterior of the canal {cc}"
     );
 }
+
+/// The DentalSegmentator fixture's lower teeth with the IOS of another patient (a phantom built
+/// on the STS 2024 mask's lower teeth): the arch fit is refused, naming the measures.
+#[test]
+fn dentalsegmentator_fixture_refuses_another_patients_ios() {
+    let (Some(ds), Some(sts)) = (
+        real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz"),
+        real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz"),
+    ) else {
+        return;
+    };
+    let lower = read_label_volume(&sts, Frame::Lps)
+        .unwrap()
+        .volume
+        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
+        .cropped_to_labels();
+    let anatomy = surface_teeth(&lower, VolumeScheme::Fdi, &SurfaceOptions::default())
+        .unwrap()
+        .teeth
+        .into_iter()
+        .map(|(f, t)| (f, t.mesh))
+        .collect();
+    let p = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
+        seed: 5,
+        jaw: toothfuse::arch::Jaw::Lower,
+        anatomy: Some(anatomy),
+        ..Default::default()
+    })
+    .unwrap();
+    let v = read_label_volume(&ds, Frame::Lps).unwrap().volume;
+    let opts = toothfuse::volume::SplitOptions::default();
+    let e = toothfuse::volume::split_teeth(&v, &p.ios_crowns(), &opts).unwrap_err();
+    eprintln!("{e}");
+    assert!(
+        matches!(e, toothfuse::Error::RegistrationRejected(_)),
+        "{e}"
+    );
+    assert!(e.to_string().contains("lower IOS crowns do not fit"), "{e}");
+}

@@ -1,4 +1,5 @@
-//! Adding the CBCT teeth of a label volume (one label per tooth) to a session.
+//! Adding the CBCT teeth of a label volume (one label per tooth, or one per jaw split with the
+//! IOS teeth held) to a session.
 
 use super::boundary::{Failure, FfiResult, ffi_panic_boundary, slice_in, write_out};
 use super::session::{toothfuse_session, with_session_mut};
@@ -30,6 +31,9 @@ pub const TOOTHFUSE_VOLUME_SCHEME_UNIVERSAL: toothfuse_volume_scheme = 1;
 /// ToothFairy2: teeth at their FDI numbers; other structures (bones, canals, sinuses, pulps,
 /// implants) are skipped.
 pub const TOOTHFUSE_VOLUME_SCHEME_TOOTHFAIRY2: toothfuse_volume_scheme = 2;
+/// DentalSegmentator: one label per jaw (3 upper teeth, 4 lower teeth; 1, 2, 5 bones and canal
+/// ignored), split into teeth with the IOS teeth already added to the session.
+pub const TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR: toothfuse_volume_scheme = 3;
 
 /// Copies a caller's label buffer into u16 labels, refusing values outside 0-65535.
 ///
@@ -83,9 +87,10 @@ fn decode_volume_scheme(s: toothfuse_volume_scheme) -> FfiResult<VolumeScheme> {
         TOOTHFUSE_VOLUME_SCHEME_FDI => Ok(VolumeScheme::Fdi),
         TOOTHFUSE_VOLUME_SCHEME_UNIVERSAL => Ok(VolumeScheme::Universal),
         TOOTHFUSE_VOLUME_SCHEME_TOOTHFAIRY2 => Ok(VolumeScheme::ToothFairy2),
+        TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR => Ok(VolumeScheme::DentalSegmentator),
         other => Err(Failure::invalid(format!(
             "volume scheme {other} is not one of TOOTHFUSE_VOLUME_SCHEME_FDI (0), UNIVERSAL (1), \
-             TOOTHFAIRY2 (2)"
+             TOOTHFAIRY2 (2), DENTALSEGMENTATOR (3)"
         ))),
     }
 }
@@ -103,13 +108,21 @@ fn decode_volume_scheme(s: toothfuse_volume_scheme) -> FfiResult<VolumeScheme> {
 ///   doubles, mm, negative flips an axis) and `origin` (3 doubles, world position of voxel 0's
 ///   centre) give an axis-aligned grid; both must then be non-NULL.
 /// - `labels`: `label_count` (= dims[0]*dims[1]*dims[2]) values of `label_type`, aligned for it.
-/// - `scheme`: the numbering of the label values.
+/// - `scheme`: the numbering of the label values. With TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR
+///   (one teeth label per jaw, no tooth numbers) the IOS teeth must be added first: each jaw's
+///   IOS crowns are registered as one arch to its teeth mask, the mask is split into teeth
+///   grown from the registered crowns, and each tooth is surfaced and added. Teeth whose split
+///   cannot be trusted are not added; after a registration or fusion each tooth's split (its
+///   share of contested voxels, or why it was refused) is among its warnings (registered teeth)
+///   or in its skipped reason.
 /// - `teeth_added_out`: when not NULL, receives the number of teeth added (on success only).
 ///
 /// Fails with NULL_PARAMETER, INVALID_ARGUMENT (count mismatch, bad matrix, negative label, a
 /// label the scheme does not know, two labels for one tooth, a DentalSegmentator-style per-jaw
-/// volume), UNIT_MISMATCH (voxel size outside 0.001-10 mm) or MISSING_DATA (no tooth label);
-/// the message names the label or voxel.
+/// volume under another scheme, IOS crowns of the other jaw only), UNIT_MISMATCH (voxel size
+/// outside 0.001-10 mm), MISSING_DATA (no tooth label; no IOS teeth for a per-jaw volume) or
+/// REGISTRATION_REJECTED (the IOS arch does not fit the per-jaw mask, or no tooth's split can
+/// be trusted); the message names the label, voxel, jaw or tooth.
 ///
 /// # Safety
 /// `session` must be NULL or a live session; the pointers must be NULL or hold the documented

@@ -24,7 +24,7 @@ pub struct Notes {
     pub skipped: Vec<(u8, CString)>,
 }
 
-fn c_string(s: &str) -> CString {
+pub(super) fn c_string(s: &str) -> CString {
     CString::new(s.bytes().filter(|&b| b != 0).collect::<Vec<u8>>()).unwrap_or_default()
 }
 
@@ -114,6 +114,7 @@ impl Session {
         self.fused = None;
         self.cut = None;
         self.notes = Notes::of_registration(&r);
+        self.add_split_notes();
         Ok(self.registration.insert(r))
     }
 
@@ -164,6 +165,7 @@ impl Session {
     pub fn cut(&mut self, opts: &PipelineOptions) -> Result<&CutJaw> {
         let cut = self.make_cut(opts)?;
         self.notes = Notes::of_cut(&cut);
+        self.add_split_notes();
         Ok(&self.cut.insert(cut).jaw)
     }
 
@@ -206,6 +208,7 @@ impl Session {
             self.registration = Some(result.registration.clone());
         }
         self.notes = Notes::of_fused(&result);
+        self.add_split_notes();
         self.fused.insert(Fused {
             result,
             report_json,

@@ -4,12 +4,14 @@
 //! The world frame is named explicitly ([`Frame`]): NIfTI's world is RAS+, NRRD's and DICOM's
 //! usually LPS+. [`LabelVolume::to_frame`] converts, so the surfaced teeth land in the frame the
 //! host expects. [`surface`] turns each label into a closed tooth mesh; [`numbering`] maps
-//! label values to FDI numbers.
+//! label values to FDI numbers; [`split`] splits a per-jaw teeth mask into teeth with the IOS.
 
 pub mod numbering;
+pub mod split;
 pub mod surface;
 
 pub use numbering::VolumeScheme;
+pub use split::{SplitOptions, SplitVolume, split_teeth};
 pub use surface::{SurfaceOptions, SurfacedTeeth, SurfacedTooth, surface_label, surface_teeth};
 
 use crate::{Error, Result};

@@ -118,3 +118,71 @@ def test_fuse_a_demo_jaw_read_from_files():
     assert jaw.teeth == [t for t in teeth if t in set(np.unique(cbct.labels))]
     assert sorted(set(jaw.labels.tolist())) == jaw.teeth
     assert all(q["watertight"] for q in jaw.quality.values()), jaw.quality
+
+
+def test_per_jaw_volume_is_split_with_the_ios_added_first():
+    """A DentalSegmentator-style volume (3 upper teeth, 4 lower teeth) is split into teeth with
+    the IOS crowns the session holds: without them it is refused, naming what to do, and the
+    session keeps no CBCT tooth."""
+    labels = np.zeros((12, 12, 12), dtype=np.uint8)
+    labels[3:9, 3:9, 3:9] = 4
+    with toothfuse.Session() as s:
+        with pytest.raises(toothfuse.ToothfuseError) as e:
+            s.add_label_volume(labels, spacing=(0.5, 0.5, 0.5), origin=(0, 0, 0),
+                               scheme="dentalsegmentator")
+        assert e.value.status_name == "missing data"
+        assert "add the IOS teeth first" in str(e.value)
+        # With an IOS crown too small to register as an arch: refused, nothing added.
+        s.add_tooth(toothfuse.IOS, 36, CUBE, TRIS[2:])
+        with pytest.raises(toothfuse.ToothfuseError) as e:
+            s.add_label_volume(labels, spacing=(0.5, 0.5, 0.5), origin=(0, 0, 0),
+                               scheme="dentalsegmentator")
+        assert "too few to register the arch" in str(e.value)
+        assert s.teeth(toothfuse.CBCT) == []
+
+
+def _arch_cap(c, r, nu=32, nv=10):
+    """Open upper cap (polar angle up to 1.9 rad) of a ball of radius r at c: (vertices, tris)."""
+    pts = [np.array(c) + [0.0, 0.0, r]]
+    for v in range(1, nv + 1):
+        polar = v / nv * 1.9
+        for u in range(nu):
+            a = u / nu * 2 * np.pi
+            pts.append(np.array(c) + r * np.array(
+                [np.sin(polar) * np.cos(a), np.sin(polar) * np.sin(a), np.cos(polar)]))
+    ring = lambda v, u: 1 + (v - 1) * nu + u % nu
+    tris = [[0, ring(1, u), ring(1, u + 1)] for u in range(nu)]
+    for v in range(1, nv):
+        for u in range(nu):
+            tris += [[ring(v, u), ring(v + 1, u), ring(v + 1, u + 1)],
+                     [ring(v, u), ring(v + 1, u + 1), ring(v, u + 1)]]
+    return np.array(pts), np.array(tris, dtype=np.uint32)
+
+
+def test_per_jaw_volume_split_by_the_ios_crowns_of_a_synthetic_arch():
+    """Six teeth (ball crowns of growing radius on cylinder roots, along a parabola) as one
+    lower-teeth class 4; the IOS crowns are the balls' caps: every tooth is split and added, and
+    after registration each carries its split confidence among its warnings."""
+    fdis = [33, 32, 31, 41, 42, 43]
+    centres = [(-20.0 + 8.0 * t, 0.03 * (-20.0 + 8.0 * t) ** 2, 0.0) for t in range(6)]
+    radii = [2.4 + 0.25 * t for t in range(6)]
+    h, origin = 0.3, np.array([-25.0, -4.0, -10.5])
+    ii, jj, kk = np.indices((165, 70, 50))
+    x, y, z = (origin[0] + h * ii, origin[1] + h * jj, origin[2] + h * kk)
+    labels = np.zeros((165, 70, 50), dtype=np.uint8)
+    for (cx, cy, cz), r in zip(centres, radii):
+        ball = (x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2 < r * r
+        root = ((x - cx) ** 2 + (y - cy) ** 2 < 1.5 ** 2) & (z < cz) & (z > cz - 9)
+        labels[ball | root] = 4
+    with toothfuse.Session() as s:
+        for f, c, r in zip(fdis, centres, radii):
+            v, t = _arch_cap(c, r)
+            s.add_tooth(toothfuse.IOS, f, v, t)
+        added = s.add_label_volume(labels, spacing=(h, h, h), origin=tuple(origin),
+                                   scheme="dentalsegmentator")
+        assert added == 6
+        assert s.teeth(toothfuse.CBCT) == sorted(fdis)
+        assert sorted(s.register(accept_questionable=True)) == sorted(fdis)
+        for f in fdis:
+            ws = s.tooth_report(f)["warnings"]
+            assert any("split from the per-jaw teeth mask" in w for w in ws), (f, ws)

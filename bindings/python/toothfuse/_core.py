@@ -330,9 +330,12 @@ class Session:
         mesh in the world frame of voxel_to_world (16 floats, row-major 4x4, voxel index ->
         mm; e.g. nibabel's img.affine for RAS, or an LPS matrix) or of spacing + origin (axis-
         aligned). labels: a 3-D numpy array indexed [i, j, k] (nibabel's order), or a flat
-        array('B'/'H'/'h'/'i') / list with i fastest plus dims. scheme: "fdi", "universal" or
-        "toothfairy2". All or nothing. Returns the number of teeth added."""
-        schemes = {"fdi": 0, "universal": 1, "toothfairy2": 2}
+        array('B'/'H'/'h'/'i') / list with i fastest plus dims. scheme: "fdi", "universal",
+        "toothfairy2" or "dentalsegmentator" (one teeth label per jaw, 3 upper and 4 lower: split
+        into teeth with the IOS teeth already added, so add the IOS first; each tooth's split,
+        its contested share or why it was refused, is in the warnings / skipped notes after
+        register or fuse). All or nothing. Returns the number of teeth added."""
+        schemes = {"fdi": 0, "universal": 1, "toothfairy2": 2, "dentalsegmentator": 3}
         if scheme not in schemes:
             raise ValueError(f"scheme {scheme!r} is not one of {sorted(schemes)}")
         if _is_ndarray(labels):

@@ -28,15 +28,22 @@ pub struct FuseArgs {
 /// Runs `toothfuse fuse`.
 pub fn run(a: &FuseArgs) -> Result<()> {
     let opts = a.input.options();
-    let (r, phantom) = match a.input.read()? {
-        Some((Ios::Jaw(lm), cbct)) => (pipeline::fuse(&lm, &cbct, &opts)?, None),
-        Some((Ios::Crowns(c), cbct)) => (pipeline::fuse_crowns(&c, &cbct, &opts)?, None),
+    let (r, phantom, split) = match a.input.read()? {
+        Some((Ios::Jaw(lm), cbct, split)) => (pipeline::fuse(&lm, &cbct, &opts)?, None, split),
+        Some((Ios::Crowns(c), cbct, split)) => {
+            (pipeline::fuse_crowns(&c, &cbct, &opts)?, None, split)
+        }
         None => {
             let ph = a.phantom.generate()?;
-            (pipeline::fuse(&ph.ios, &ph.cbct, &opts)?, Some(ph))
+            (pipeline::fuse(&ph.ios, &ph.cbct, &opts)?, Some(ph), None)
         }
     };
     write_outputs(&r, &a.out, &a.format)?;
+    if let Some(json) = split {
+        // The per-tooth split of a per-jaw CBCT volume, beside report.json.
+        let p = a.out.join("split.json");
+        std::fs::write(&p, json).with_context(|| format!("writing {}", p.display()))?;
+    }
     let rep = r.report();
     let watertight = rep.teeth.iter().filter(|t| t.watertight).count();
     for s in &rep.skipped {

@@ -9,7 +9,10 @@ use toothfuse::io::{LabelScheme, TeethOptions, detect_scheme, labels_to_fdi};
 use toothfuse::mesh::LabeledMesh;
 use toothfuse::pipeline::PipelineOptions;
 use toothfuse::register::{OutputFrame, Preset};
-use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
+use toothfuse::volume::numbering::looks_like_dentalsegmentator;
+use toothfuse::volume::{
+    Frame, LabelVolume, SplitOptions, SurfaceOptions, VolumeScheme, split_teeth, surface_teeth,
+};
 
 /// Inputs and options shared by `register` and `fuse`.
 #[derive(Args, Clone, Debug)]
@@ -23,8 +26,10 @@ pub struct InputArgs {
     #[arg(long, requires = "ios")]
     pub cbct: Option<PathBuf>,
     /// Numbering of a CBCT label volume's values: fdi (STS 2024 and most tooth models),
-    /// universal (1-32) or toothfairy2 (teeth at FDI numbers, other structures skipped).
-    #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "toothfairy2"])]
+    /// universal (1-32), toothfairy2 (teeth at FDI numbers, other structures skipped) or
+    /// dentalsegmentator (3 upper teeth, 4 lower teeth, no tooth numbers: each jaw's teeth are
+    /// split into teeth with the IOS crowns; also chosen when the labels look like it).
+    #[arg(long, default_value = "fdi", value_parser = ["fdi", "universal", "toothfairy2", "dentalsegmentator"])]
     pub cbct_classes: String,
     /// World frame the CBCT label volume is expressed in (and so the fused teeth, with
     /// --frame cbct): lps (DICOM, ITK, 3D Slicer files) or ras (NIfTI, Slicer's scene).
@@ -54,6 +59,10 @@ pub struct InputArgs {
     pub accept_questionable: bool,
 }
 
+/// The IOS input, the CBCT teeth by FDI, and the split's JSON when the CBCT was a per-jaw
+/// volume split with the IOS.
+pub type Inputs = (Ios, BTreeMap<u8, TriMesh>, Option<String>);
+
 /// The IOS input: a labeled jaw or per-tooth crowns.
 pub enum Ios {
     /// One labeled jaw mesh (labels converted to FDI).
@@ -77,16 +86,17 @@ impl InputArgs {
         o
     }
 
-    /// Both inputs, or `None` for the synthetic jaw.
-    pub fn read(&self) -> Result<Option<(Ios, BTreeMap<u8, TriMesh>)>> {
+    /// Both inputs, or `None` for the synthetic jaw; with a per-jaw CBCT volume, also the split's
+    /// JSON.
+    pub fn read(&self) -> Result<Option<Inputs>> {
         let (Some(ios), Some(cbct)) = (&self.ios, &self.cbct) else {
             return Ok(None);
         };
         let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
         if toothfuse::io::is_volume_path(cbct) {
-            let teeth = self.read_volume_teeth(cbct)?;
+            let (teeth, split) = self.read_volume_teeth(cbct, &ios)?;
             eprintln!("{ios_note}");
-            return Ok(Some((ios, teeth)));
+            return Ok(Some((ios, teeth, split)));
         }
         let opts = TeethOptions {
             scheme: self.scheme(),
@@ -105,17 +115,38 @@ impl InputArgs {
             t.scheme.scheme.name(),
             t.scheme.reason
         );
-        Ok(Some((ios, t.teeth)))
+        Ok(Some((ios, t.teeth, None)))
     }
 
-    /// The teeth of a CBCT label volume, surfaced in the --cbct-frame world; skipped labels
-    /// (fragments, non-tooth structures) are named on stderr.
-    fn read_volume_teeth(&self, path: &Path) -> Result<BTreeMap<u8, TriMesh>> {
+    /// The teeth of a CBCT label volume, surfaced in the --cbct-frame world (a per-jaw volume
+    /// split with the IOS crowns first); skipped labels (fragments, non-tooth structures) and
+    /// the split per tooth are named on stderr.
+    fn read_volume_teeth(
+        &self,
+        path: &Path,
+        ios: &Ios,
+    ) -> Result<(BTreeMap<u8, TriMesh>, Option<String>)> {
         let frame = Frame::from_name(&self.cbct_frame).unwrap_or_default();
-        let scheme = VolumeScheme::from_name(&self.cbct_classes).unwrap_or_default();
+        let mut scheme = VolumeScheme::from_name(&self.cbct_classes).unwrap_or_default();
         let vf = toothfuse::io::read_label_volume(path, frame)
             .with_context(|| format!("reading CBCT volume {}", path.display()))?;
-        let t = surface_teeth(&vf.volume, scheme, &SurfaceOptions::default())
+        let mut vol = vf.volume;
+        let labels: Vec<u16> = vol.label_counts().keys().copied().collect();
+        if scheme == VolumeScheme::Fdi && looks_like_dentalsegmentator(&labels) {
+            eprintln!(
+                "note: {}: labels {labels:?} look like DentalSegmentator classes (3 upper teeth, \
+                 4 lower teeth): splitting them into teeth with the IOS",
+                path.display()
+            );
+            scheme = VolumeScheme::DentalSegmentator;
+        }
+        let mut split = None;
+        if scheme == VolumeScheme::DentalSegmentator {
+            let (v, json) = split_with_ios(&vol, ios)
+                .with_context(|| format!("splitting the teeth of {}", path.display()))?;
+            (vol, split, scheme) = (v, Some(json), VolumeScheme::Fdi);
+        }
+        let t = surface_teeth(&vol, scheme, &SurfaceOptions::default())
             .with_context(|| format!("surfacing the teeth of {}", path.display()))?;
         for (label, why) in &t.skipped {
             eprintln!("note: {}: label {label} skipped: {why}", path.display());
@@ -130,8 +161,38 @@ impl InputArgs {
                 );
             }
         }
-        Ok(t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect())
+        Ok((
+            t.teeth.into_iter().map(|(f, t)| (f, t.mesh)).collect(),
+            split,
+        ))
     }
+}
+
+/// The per-tooth FDI volume split from a per-jaw volume with the IOS crowns; the split per
+/// tooth (contested share or why refused) on stderr; and the split's JSON.
+fn split_with_ios(vol: &LabelVolume, ios: &Ios) -> Result<(LabelVolume, String)> {
+    let crowns = match ios {
+        Ios::Jaw(lm) => toothfuse::fuse::ios_crowns(lm)?,
+        Ios::Crowns(c) => c.clone(),
+    };
+    let split = split_teeth(vol, &crowns, &SplitOptions::default())?;
+    for n in &split.notes {
+        eprintln!("note: {n}");
+    }
+    for j in &split.jaws {
+        eprintln!(
+            "split: {:?} arch fit of the IOS crowns to the teeth mask: {:.0}% of crown points \
+             within 1 mm, RMS {:.2} mm",
+            j.jaw,
+            100.0 * j.fit.inlier_share,
+            j.fit.rms_mm
+        );
+    }
+    for line in split.summary() {
+        eprintln!("split: {line}");
+    }
+    let json = split.to_json();
+    Ok((split.volume, json))
 }
 
 /// The IOS input and a line saying which labels and numbering were used.

@@ -27,7 +27,7 @@ pub fn run(a: &RegisterArgs) -> Result<()> {
     let mut opts = a.input.options().register;
     opts.frame = a.input.options().frame;
     let r = match a.input.read()? {
-        Some((ios, cbct)) => {
+        Some((ios, cbct, _split)) => {
             let crowns = match ios {
                 Ios::Jaw(lm) => ios_crowns(&lm).context("splitting the IOS jaw into crowns")?,
                 Ios::Crowns(c) => c,
