@@ -4,6 +4,8 @@
 
 mod ffi_common;
 
+mod real_data;
+
 use ffi_common::Session;
 use std::ffi::c_void;
 use std::ptr;
@@ -323,15 +325,9 @@ fn per_jaw_volume_needs_the_ios_first() {
 #[test]
 fn per_jaw_volume_split_with_the_held_ios_crowns() {
     use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
+    let Some(p) = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz") else {
         return;
     };
-    let p = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
-    if !p.exists() {
-        eprintln!("SKIPPED: {} not found", p.display());
-        return;
-    }
     let vol = toothfuse::io::read_label_volume(&p, Frame::Lps)
         .unwrap()
         .volume

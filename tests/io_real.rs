@@ -1,29 +1,15 @@
 //! Real dental meshes (../shared/data/real): the Mesh Labeler IOS scan (VTP, base64 appended,
 //! zlib) and Open-Full-Jaw CBCT teeth (binary STL). Skipped with a message when absent.
 
+mod real_data;
+
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use toothfuse::io::{LabelScheme, read_mesh, read_teeth_with, write_mesh};
 use toothfuse::mesh::ValidateOptions;
 
-fn real(rel: &str) -> Option<PathBuf> {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!(
-            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
-        );
-        return None;
-    };
-    let p = dir.join(rel);
-    if !p.exists() {
-        eprintln!("SKIPPED: {} not found", p.display());
-        return None;
-    }
-    Some(p)
-}
-
 #[test]
 fn example_01_vtp_counts_and_labels() {
-    let Some(p) = real("ios_mesh_labeler/Example_01.vtp") else {
+    let Some(p) = real_data::real("ios_mesh_labeler/Example_01.vtp") else {
         return;
     };
     let lm = read_mesh(&p).unwrap();
@@ -70,8 +56,8 @@ fn example_01_vtp_counts_and_labels() {
 #[test]
 fn mesh_labeler_label_8_is_fdi_11_by_landmarks() {
     let (Some(p), Some(f)) = (
-        real("ios_mesh_labeler/Example_01.vtp"),
-        real("ios_mesh_labeler/Example_01_UR1.fcsv"),
+        real_data::real("ios_mesh_labeler/Example_01.vtp"),
+        real_data::real("ios_mesh_labeler/Example_01_UR1.fcsv"),
     ) else {
         return;
     };
@@ -143,7 +129,7 @@ fn mesh_labeler_label_8_is_fdi_11_by_landmarks() {
 
 #[test]
 fn openfulljaw_tooth_17_stl_is_closed_manifold_and_round_trips() {
-    let Some(p) = real("cbct_teeth_openfulljaw_p26/mandible/tooth_17.stl") else {
+    let Some(p) = real_data::real("cbct_teeth_openfulljaw_p26/mandible/tooth_17.stl") else {
         return;
     };
     let lm = read_mesh(&p).unwrap();
@@ -174,7 +160,7 @@ fn openfulljaw_tooth_17_stl_is_closed_manifold_and_round_trips() {
 
 #[test]
 fn openfulljaw_mandible_folder_in_universal_numbering() {
-    let Some(p) = real("cbct_teeth_openfulljaw_p26/mandible") else {
+    let Some(p) = real_data::real("cbct_teeth_openfulljaw_p26/mandible") else {
         return;
     };
     let teeth = read_teeth_with(&p, LabelScheme::Universal).unwrap();

@@ -5,6 +5,8 @@
 //! measured against the truth (TRE over the whole true tooth, watertightness). Skipped with a
 //! message when the real data is absent.
 
+mod real_data;
+
 use glam::DMat4;
 use std::collections::BTreeMap;
 use toothfuse::TriMesh;
@@ -15,17 +17,7 @@ use toothfuse::pipeline::{self, PipelineOptions};
 use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
 
 fn mask() -> Option<toothfuse::volume::LabelVolume> {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!(
-            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
-        );
-        return None;
-    };
-    let p = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
-    if !p.exists() {
-        eprintln!("SKIPPED: {} not found", p.display());
-        return None;
-    }
+    let p = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz")?;
     let v = read_label_volume(&p, Frame::Lps).unwrap().volume;
     // The lower jaw's teeth only (31-48), cropped to them.
     Some(

@@ -1,27 +1,13 @@
 //! Real CBCT label volumes (../shared/data/real): the STS 2024 per-tooth FDI mask and the
 //! DentalSegmentator per-jaw fixture. Skipped with a message when absent.
 
+mod real_data;
+
 use glam::{DMat3, DVec3};
-use std::path::PathBuf;
 use toothfuse::TriMesh;
 use toothfuse::io::read_label_volume;
 use toothfuse::mesh::ValidateOptions;
 use toothfuse::volume::{Frame, LabelVolume, SurfaceOptions, VolumeScheme, surface_teeth};
-
-fn real(rel: &str) -> Option<PathBuf> {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!(
-            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
-        );
-        return None;
-    };
-    let p = dir.join(rel);
-    if !p.exists() {
-        eprintln!("SKIPPED: {} not found", p.display());
-        return None;
-    }
-    Some(p)
-}
 
 fn check_closed(m: &TriMesh, what: &str) {
     let r = m
@@ -92,7 +78,7 @@ fn iso_distances(vol: &LabelVolume, label: u16, m: &TriMesh) -> Vec<f64> {
 
 #[test]
 fn sts2024_mask_surfaces_every_tooth_closed_on_the_iso_level() {
-    let Some(p) = real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz") else {
+    let Some(p) = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz") else {
         return;
     };
     let vf = read_label_volume(&p, Frame::Lps).unwrap();
@@ -157,7 +143,8 @@ fn sts2024_mask_surfaces_every_tooth_closed_on_the_iso_level() {
 
 #[test]
 fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
-    let Some(p) = real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz") else {
+    let Some(p) = real_data::real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz")
+    else {
         return;
     };
     let vf = read_label_volume(&p, Frame::Lps).unwrap();
@@ -230,8 +217,8 @@ fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
 #[test]
 fn dentalsegmentator_fixture_refuses_another_patients_ios() {
     let (Some(ds), Some(sts)) = (
-        real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz"),
-        real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz"),
+        real_data::real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz"),
+        real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz"),
     ) else {
         return;
     };

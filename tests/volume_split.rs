@@ -6,6 +6,8 @@
 //! labels (Dice per tooth) and the fusion against the truth (TRE over the whole true tooth),
 //! next to the per-tooth volume path. Skipped with a message when the real data is absent.
 
+mod real_data;
+
 use glam::{DMat4, DVec3};
 use std::collections::BTreeMap;
 use toothfuse::TriMesh;
@@ -19,17 +21,7 @@ use toothfuse::volume::{
 
 /// The STS mask's teeth of one jaw (FDI labels), cropped to them.
 fn mask(jaw: Jaw) -> Option<LabelVolume> {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!(
-            "SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA or provide ../shared/data/real)"
-        );
-        return None;
-    };
-    let p = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
-    if !p.exists() {
-        eprintln!("SKIPPED: {} not found", p.display());
-        return None;
-    }
+    let p = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz")?;
     let v = read_label_volume(&p, Frame::Lps).unwrap().volume;
     let keep = move |l: u16| match jaw {
         Jaw::Lower => (31..=48).contains(&l),
