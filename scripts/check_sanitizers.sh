@@ -65,9 +65,9 @@ if rustup toolchain list 2>/dev/null | grep -q '^nightly'; then
   rustup +nightly component add miri rust-src >/dev/null 2>&1 || true
 fi
 if cargo +nightly miri --version >/dev/null 2>&1; then
-  step "Miri: cargo +nightly miri test --lib ffi::"
+  step "Miri: cargo +nightly miri test --lib --no-default-features ffi::"
   MIRIFLAGS="${MIRIFLAGS:--Zmiri-strict-provenance}" \
-    cargo +nightly miri test --lib --target-dir "$ROOT/target/miri-build" -- ffi::
+    cargo +nightly miri test --lib --no-default-features --target-dir "$ROOT/target/miri-build" -- ffi::
 else
   echo "SKIPPED Miri: no nightly toolchain with the miri component (rustup toolchain install nightly --component miri rust-src)"
 fi

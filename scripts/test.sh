@@ -3,7 +3,8 @@
 #   bash scripts/test.sh
 # On a fresh Debian machine it installs (apt-get) cmake, pkg-config, g++, libvtk9-dev,
 # libopenmesh-dev, libgtest-dev, and cbindgen 0.29.0 (cargo), plus rustfmt/clippy (rustup).
-# Then: cargo fmt --check, cargo clippy -D warnings, cargo test --release, the header check,
+# Then: cargo fmt --check, cargo clippy -D warnings, cargo test --release (library, CLI and
+# integration tests), the header check,
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
 # tests against the installed package), an outside find_package consumer, a pkg-config build, and
 # the Python package: pip install ./bindings/python into a fresh venv (numpy and pytest from PyPI;
@@ -56,8 +57,10 @@ cargo fmt --check
 section "cargo clippy --all-targets -- -D warnings"
 cargo clippy --all-targets -- -D warnings
 
-section "cargo test --release"
-cargo test --release
+section "cargo test --release --lib --bins --tests"
+# The library's unit tests, the CLI's and every integration test; the examples and benches are
+# compiled (checked) by clippy above and not built again here.
+cargo test --release --lib --bins --tests
 
 # ---------------------------------------------------------------------------------------------
 section "header check (include/toothfuse.h is what cbindgen $CBINDGEN_VERSION generates)"
