@@ -4,6 +4,9 @@
 //! (DentalSegmentator style) with the IOS crowns of a phantom built on them (built outside the
 //! timing). Skipped with a message when the real data is absent.
 
+#[path = "../tests/real_data/mod.rs"]
+mod real_data;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use toothfuse::io::read_label_volume;
@@ -18,23 +21,8 @@ fn per_jaw_lower(
     LabelVolume,
     std::collections::BTreeMap<u8, toothfuse::TriMesh>,
 ) {
-    let lower = both
-        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
-        .cropped_to_labels();
-    let anatomy = surface_teeth(&lower, VolumeScheme::Fdi, &SurfaceOptions::default())
-        .expect("teeth")
-        .teeth
-        .into_iter()
-        .map(|(f, t)| (f, t.mesh))
-        .collect();
-    let p = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
-        seed: 5,
-        jaw: toothfuse::arch::Jaw::Lower,
-        variant: toothfuse::phantom::Variant::Full,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .expect("phantom");
+    let lower = real_data::lower_teeth(both);
+    let p = real_data::phantom_on(&lower, toothfuse::arch::Jaw::Lower, 5);
     (
         lower.relabeled(|l| if l != 0 { 4 } else { 0 }),
         p.ios_crowns(),

@@ -3,13 +3,14 @@
 //! the STS 2024 mask (../shared/data/real; skipped with a message when absent), checked against
 //! the truth through report.json.
 
-use std::collections::BTreeMap;
+mod real_data;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
+use toothfuse::Rigid;
 use toothfuse::arch::Jaw;
-use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
-use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
-use toothfuse::{Rigid, TriMesh};
+use toothfuse::phantom::Phantom;
+use toothfuse::volume::Frame;
 
 fn tf(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_toothfuse"))
@@ -98,21 +99,14 @@ fn info_lists_grid_orientation_and_labels() {
 
 #[test]
 fn fuse_from_the_sts_mask_file() {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
+    let Some(mask) = real_data::real(real_data::STS_MASK) else {
         return;
     };
-    let mask = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
-    if !mask.exists() {
-        eprintln!("SKIPPED: {} not found", mask.display());
-        return;
-    }
     // Truth: the mask's lower teeth in its LPS world, which is also the CBCT frame of the file.
     let vol = toothfuse::io::read_label_volume(&mask, Frame::Lps)
         .unwrap()
         .volume;
-    let lower = vol.relabeled(|l| if (31..=48).contains(&l) { l } else { 0 });
-    let p = sts_phantom(&lower);
+    let p = real_data::phantom_on(&real_data::lower_teeth(&vol), Jaw::Lower, 3);
     let d = tmp("fuse");
     let ios = d.join("ios.ply");
     let labels = p.ios.vertex_labels.clone().unwrap();
@@ -136,25 +130,6 @@ fn fuse_from_the_sts_mask_file() {
     );
     let (mean, n) = fused_mean_tre(&out, &p);
     eprintln!("CLI fuse from the STS mask file: mean TRE {mean:.3} mm over {n} teeth");
-}
-
-/// A lower-jaw phantom whose true teeth are the teeth of `lower` (the STS mask's lower teeth, FDI
-/// labels) surfaced in its world.
-fn sts_phantom(lower: &toothfuse::volume::LabelVolume) -> Phantom {
-    let teeth = surface_teeth(lower, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap();
-    let anatomy: BTreeMap<u8, TriMesh> = teeth
-        .teeth
-        .iter()
-        .map(|(f, t)| (*f, t.mesh.clone()))
-        .collect();
-    Phantom::generate(&PhantomOptions {
-        seed: 3,
-        jaw: Jaw::Lower,
-        variant: Variant::Full,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .unwrap()
 }
 
 /// Checks `out/report.json` of a fuse of the STS lower-teeth phantom: the ten expected teeth,
@@ -210,23 +185,12 @@ fn write_nrrd(path: &std::path::Path, v: &toothfuse::volume::LabelVolume) {
 
 #[test]
 fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
-    let Some(dir) = toothfuse::io::real_data_dir() else {
-        eprintln!("SKIPPED: real data folder not found (set TOOTHFUSE_REAL_DATA)");
-        return;
-    };
-    let mask = dir.join("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz");
-    if !mask.exists() {
-        eprintln!("SKIPPED: {} not found", mask.display());
-        return;
-    }
     // The mask's lower teeth as the phantom's anatomy; the file holds them merged into
     // DentalSegmentator's lower teeth class (4) in the same LPS world.
-    let vol = toothfuse::io::read_label_volume(&mask, Frame::Lps)
-        .unwrap()
-        .volume
-        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
-        .cropped_to_labels();
-    let p = sts_phantom(&vol);
+    let Some(vol) = real_data::sts_lower_teeth() else {
+        return;
+    };
+    let p = real_data::phantom_on(&vol, Jaw::Lower, 3);
     let d = tmp("split");
     let nrrd = d.join("dentalsegmentator.nrrd");
     write_nrrd(&nrrd, &vol.relabeled(|l| if l != 0 { 4 } else { 0 }));

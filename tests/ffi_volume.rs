@@ -324,29 +324,10 @@ fn per_jaw_volume_needs_the_ios_first() {
 /// registration each tooth's split among its warnings. Skipped when the real data is absent.
 #[test]
 fn per_jaw_volume_split_with_the_held_ios_crowns() {
-    use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
-    let Some(p) = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz") else {
+    let Some(vol) = real_data::sts_lower_teeth() else {
         return;
     };
-    let vol = toothfuse::io::read_label_volume(&p, Frame::Lps)
-        .unwrap()
-        .volume
-        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
-        .cropped_to_labels();
-    let anatomy = surface_teeth(&vol, VolumeScheme::Fdi, &SurfaceOptions::default())
-        .unwrap()
-        .teeth
-        .into_iter()
-        .map(|(f, t)| (f, t.mesh))
-        .collect();
-    let ph = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
-        seed: 5,
-        jaw: toothfuse::arch::Jaw::Lower,
-        variant: toothfuse::phantom::Variant::Full,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .unwrap();
+    let ph = real_data::phantom_on(&vol, toothfuse::arch::Jaw::Lower, 5);
     let s = Session::new();
     for (fdi, m) in ph.ios_crowns() {
         let v: Vec<f64> = m.positions.iter().flat_map(|p| p.to_array()).collect();

@@ -8,23 +8,10 @@
 mod real_data;
 
 use glam::DMat4;
-use std::collections::BTreeMap;
-use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
-use toothfuse::io::read_label_volume;
-use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+use toothfuse::phantom::Phantom;
 use toothfuse::pipeline::{self, PipelineOptions};
-use toothfuse::volume::{Frame, SurfaceOptions, VolumeScheme, surface_teeth};
-
-fn mask() -> Option<toothfuse::volume::LabelVolume> {
-    let p = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz")?;
-    let v = read_label_volume(&p, Frame::Lps).unwrap().volume;
-    // The lower jaw's teeth only (31-48), cropped to them.
-    Some(
-        v.relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
-            .cropped_to_labels(),
-    )
-}
+use toothfuse::volume::{SurfaceOptions, VolumeScheme, surface_teeth};
 
 /// Mean TRE (mm) over the fused teeth and whether every fused tooth is watertight.
 fn fuse_and_measure(p: &Phantom, what: &str) -> (f64, usize, bool) {
@@ -41,25 +28,14 @@ fn fuse_and_measure(p: &Phantom, what: &str) -> (f64, usize, bool) {
 
 #[test]
 fn per_tooth_volume_fuses_as_well_as_meshes() {
-    let Some(vol) = mask() else { return };
-    let truth = surface_teeth(&vol, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap();
-    let anatomy: BTreeMap<u8, TriMesh> = truth
-        .teeth
-        .iter()
-        .map(|(f, t)| (*f, t.mesh.clone()))
-        .collect();
+    let Some(vol) = real_data::sts_lower_teeth() else {
+        return;
+    };
+    let p = real_data::phantom_on(&vol, Jaw::Lower, 5);
     assert_eq!(
-        anatomy.keys().copied().collect::<Vec<_>>(),
+        p.truth.teeth.keys().copied().collect::<Vec<_>>(),
         vec![31, 32, 33, 35, 36, 37, 41, 42, 43, 44]
     );
-    let p = Phantom::generate(&PhantomOptions {
-        seed: 5,
-        jaw: Jaw::Lower,
-        variant: Variant::Full,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .expect("phantom from the STS mask");
     // The mask in the phantom's CBCT frame: its affine composed with world -> CBCT.
     let w2c = p.truth.world_to_cbct;
     let placed = {

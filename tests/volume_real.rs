@@ -218,28 +218,12 @@ fn dentalsegmentator_fixture_classes_and_teeth_in_place() {
 fn dentalsegmentator_fixture_refuses_another_patients_ios() {
     let (Some(ds), Some(sts)) = (
         real_data::real("cbct_dentalsegmentator/PostDentalSurgery_Segmentation.nii.gz"),
-        real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz"),
+        real_data::real(real_data::STS_MASK),
     ) else {
         return;
     };
-    let lower = read_label_volume(&sts, Frame::Lps)
-        .unwrap()
-        .volume
-        .relabeled(|l| if (31..=48).contains(&l) { l } else { 0 })
-        .cropped_to_labels();
-    let anatomy = surface_teeth(&lower, VolumeScheme::Fdi, &SurfaceOptions::default())
-        .unwrap()
-        .teeth
-        .into_iter()
-        .map(|(f, t)| (f, t.mesh))
-        .collect();
-    let p = toothfuse::phantom::Phantom::generate(&toothfuse::phantom::PhantomOptions {
-        seed: 5,
-        jaw: toothfuse::arch::Jaw::Lower,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .unwrap();
+    let lower = real_data::lower_teeth(&read_label_volume(&sts, Frame::Lps).unwrap().volume);
+    let p = real_data::phantom_on(&lower, toothfuse::arch::Jaw::Lower, 5);
     let v = read_label_volume(&ds, Frame::Lps).unwrap().volume;
     let opts = toothfuse::volume::SplitOptions::default();
     let e = toothfuse::volume::split_teeth(&v, &p.ios_crowns(), &opts).unwrap_err();

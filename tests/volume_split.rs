@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
 use toothfuse::io::read_label_volume;
-use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
+use toothfuse::phantom::{Phantom, PhantomOptions};
 use toothfuse::pipeline::{self, PipelineOptions};
 use toothfuse::volume::{
     Frame, LabelVolume, SplitOptions, SurfaceOptions, VolumeScheme, split_teeth, surface_teeth,
@@ -21,7 +21,7 @@ use toothfuse::volume::{
 
 /// The STS mask's teeth of one jaw (FDI labels), cropped to them.
 fn mask(jaw: Jaw) -> Option<LabelVolume> {
-    let p = real_data::real("cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz")?;
+    let p = real_data::real(real_data::STS_MASK)?;
     let v = read_label_volume(&p, Frame::Lps).unwrap().volume;
     let keep = move |l: u16| match jaw {
         Jaw::Lower => (31..=48).contains(&l),
@@ -35,20 +35,7 @@ fn mask(jaw: Jaw) -> Option<LabelVolume> {
 
 /// The phantom built on the mask's teeth and the mask placed in its CBCT frame.
 fn phantom(vol: &LabelVolume, jaw: Jaw) -> (Phantom, LabelVolume) {
-    let truth = surface_teeth(vol, VolumeScheme::Fdi, &SurfaceOptions::default()).unwrap();
-    let anatomy: BTreeMap<u8, TriMesh> = truth
-        .teeth
-        .iter()
-        .map(|(f, t)| (*f, t.mesh.clone()))
-        .collect();
-    let p = Phantom::generate(&PhantomOptions {
-        seed: 5,
-        jaw,
-        variant: Variant::Full,
-        anatomy: Some(anatomy),
-        ..Default::default()
-    })
-    .expect("phantom from the STS mask");
+    let p = real_data::phantom_on(vol, jaw, 5);
     let w2c = p.truth.world_to_cbct;
     let mut placed = vol.clone();
     placed.voxel_to_world =
