@@ -23,8 +23,8 @@
 //! - `fuse`: the whole library fuse from the labelled jaw (`pipeline::fuse`: split, register,
 //!   cut, stitch), what `toothfuse fuse` runs between reading and writing.
 //!
-//! `cargo bench --bench stages` (a few minutes; the foreign jaws' stitching takes seconds per
-//! run); `cargo bench --bench stages -- 'stages_clean_1x/'` for one input or `-- /stitch` for one
+//! `cargo bench -p toothfuse-benches --bench stages` (a few minutes; the foreign jaws' stitching takes seconds per
+//! run); `cargo bench -p toothfuse-benches --bench stages -- 'stages_clean_1x/'` for one input or `-- /stitch` for one
 //! stage; `STAGES_INPUTS=clean_1x,f901_upper` generates or reads only those inputs.
 //! `benches/table.sh` turns the medians into the README table.
 

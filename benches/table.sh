@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" != "--no-bench" ]; then
   echo "load before the benchmark: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
-  cargo bench --bench stages >&2
+  cargo bench -p toothfuse-benches --bench stages >&2
 fi
 cargo build --release --example peak_memory >&2
 echo "Measured $(date -u +%Y-%m-%d) at commit $(git rev-parse --short HEAD);" \

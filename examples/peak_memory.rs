@@ -9,7 +9,7 @@
 //!
 //! `cargo run --release --example peak_memory` (`STAGES_INPUTS=clean_1x,f901_upper` for a
 //! subset). With `--stages DIR` it prints instead the per-stage criterion medians found in
-//! `DIR` (normally `target/criterion`, after `cargo bench --bench stages`), one column per
+//! `DIR` (normally `target/criterion`, after `cargo bench -p toothfuse-benches --bench stages`), one column per
 //! input: the README's speed table (see `benches/table.sh`).
 
 #[path = "../benches/common/inputs.rs"]
@@ -178,7 +178,7 @@ fn stage_table(dir: &Path) {
         .collect();
     if names.is_empty() {
         eprintln!(
-            "no stages_* results in {} (run cargo bench --bench stages)",
+            "no stages_* results in {} (run cargo bench -p toothfuse-benches --bench stages)",
             dir.display()
         );
         std::process::exit(1);

@@ -54,8 +54,8 @@ fi
 section "cargo fmt --check"
 cargo fmt --check
 
-section "cargo clippy --all-targets -- -D warnings"
-cargo clippy --all-targets -- -D warnings
+section "cargo clippy --workspace --all-targets -- -D warnings (library, CLI, tests, examples, benches)"
+cargo clippy --workspace --all-targets -- -D warnings
 
 section "cargo test --release --lib --bins --tests"
 # The library's unit tests, the CLI's and every integration test; the examples and benches are

@@ -91,7 +91,8 @@ pub fn phantom(name: &str, export: IosExport) -> Input {
 /// The folder of the foreign jaws: `$TOOTHFUSE_FOREIGN_DATA`, else `shared/data/foreign` beside
 /// the checkout or beside its parent (a worktree), else `/work/shared/data/foreign`.
 pub fn foreign_dir() -> Option<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    // The repository root: this crate is its benches/ folder.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut candidates: Vec<PathBuf> = std::env::var_os("TOOTHFUSE_FOREIGN_DATA")
         .map(PathBuf::from)
         .into_iter()
