@@ -9,8 +9,9 @@
 // origin and extent), fused per tooth (FDI labels) and as DentalSegmentator's one upper-teeth
 // class split by the IOS; checked for watertightness, fused roots on the voxelized CBCT teeth and
 // TRE against the ground truth. Error paths: a missing label array, a non-FDI label, too few
-// teeth, float or multi-component image scalars give one clean vtkError naming the cause
-// (toothfuse's own message for library errors) and an empty output.
+// teeth, float or multi-component image scalars, a negative label in copied image scalars give
+// one clean vtkError naming the cause (toothfuse's own message for library errors) and an empty
+// output; the volume scheme reaches the library (label 5: refused as FDI, added as Universal).
 #include "register_fuse_support.hpp"
 
 #include <vtkCallbackCommand.h>
@@ -27,6 +28,7 @@
 #include <vtkImageData.h>
 #include <vtkImageStencilData.h>
 #include <vtkIntArray.h>
+#include <vtkLongLongArray.h>
 #include <vtkMassProperties.h>
 #include <vtkMatrix3x3.h>
 #include <vtkNew.h>
@@ -685,26 +687,26 @@ TEST(VtkToothfuseFilter, LibraryErrorsCarryToothfuseMessage) {
 }
 
 TEST(VtkToothfuseFilter, UnsupportedImageScalarsAreACleanError) {
-  // A 6x6x6 grid holding a 4-voxel cube of tooth 11.
-  auto image_of = [](vtkDataArray* scalars, int components) {
+  // A 6x6x6 grid of 1 mm voxels holding a 4-voxel cube (64 mm^3) of label `label`.
+  auto image_of = [](vtkDataArray* scalars, int components, int label) {
     auto image = vtkSmartPointer<vtkImageData>::New();
     image->SetDimensions(6, 6, 6);
-    image->SetSpacing(0.5, 0.5, 0.5);
     scalars->SetName("labels");
     scalars->SetNumberOfComponents(components);
     scalars->SetNumberOfTuples(216);
     scalars->Fill(0);
     for (int k = 1; k < 5; k++)
       for (int j = 1; j < 5; j++)
-        for (int i = 1; i < 5; i++) scalars->SetComponent(i + 6 * (j + 6 * k), 0, 11);
+        for (int i = 1; i < 5; i++) scalars->SetComponent(i + 6 * (j + 6 * k), 0, label);
     image->GetPointData()->SetScalars(scalars);
     return image;
   };
-  auto run = [](vtkDataObject* cbct, int* status) {
+  auto run = [](vtkDataObject* cbct, int* status, int scheme) {
     vtkNew<vtkToothfuseFilter> f;
     ErrorSink errors(f);
     f->SetIOSInputData(labeled_box(kOpen, 11));
     f->SetCBCTInputData(cbct);
+    f->SetVolumeScheme(scheme);
     f->Update();
     EXPECT_EQ(errors.messages.size(), 1u);
     EXPECT_EQ(errors.pipeline.size(), 1u);  // the request failed
@@ -712,28 +714,46 @@ TEST(VtkToothfuseFilter, UnsupportedImageScalarsAreACleanError) {
     *status = f->GetLastStatus();
     return errors.messages.empty() ? std::string() : errors.messages[0];
   };
+  const int fdi = vtkToothfuseFilter::VOLUME_SCHEME_FDI;
   int status = 0;
   vtkNew<vtkFloatArray> floats;
-  std::string m = run(image_of(floats, 1), &status);
+  std::string m = run(image_of(floats, 1, 11), &status, fdi);
   EXPECT_NE(m.find("CBCT image scalars \"labels\" are of type float: a label volume holds "
                    "integer labels"),
             std::string::npos)
       << m;
   EXPECT_EQ(status, static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT));
   vtkNew<vtkUnsignedCharArray> rgb;
-  m = run(image_of(rgb, 3), &status);
+  m = run(image_of(rgb, 3, 11), &status, fdi);
   EXPECT_NE(m.find("CBCT image scalars \"labels\" have 3 components"), std::string::npos) << m;
+  EXPECT_EQ(status, static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT));
+  // Other integer types are copied, refusing what no label type holds.
+  vtkNew<vtkLongLongArray> wide;
+  vtkSmartPointer<vtkImageData> image = image_of(wide, 1, 11);
+  wide->SetComponent(100, 0, -1);
+  m = run(image, &status, fdi);
+  EXPECT_NE(m.find("CBCT image scalars \"labels\": label -1 at voxel 100 is outside 0-65535"),
+            std::string::npos)
+      << m;
   EXPECT_EQ(status, static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT));
   // Integer scalars reach the library, whose message names the fault: label 19 is no FDI tooth.
   vtkNew<vtkIntArray> ints;
-  vtkSmartPointer<vtkImageData> image = image_of(ints, 1);
+  image = image_of(ints, 1, 11);
   ints->SetComponent(100, 0, 19);
-  m = run(image, &status);
+  m = run(image, &status, fdi);
   EXPECT_NE(m.find("toothfuse_session_add_label_volume (CBCT) failed (invalid argument"),
             std::string::npos)
       << m;
   EXPECT_NE(m.find("19"), std::string::npos) << m;
   EXPECT_EQ(status, static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT));
+  // The scheme reaches the library: label 5 is no FDI tooth but Universal tooth 5 (FDI 14),
+  // added, and then too few teeth to fuse.
+  vtkNew<vtkShortArray> shorts;
+  image = image_of(shorts, 1, 5);
+  m = run(image, &status, fdi);
+  EXPECT_NE(m.find("toothfuse_session_add_label_volume (CBCT) failed"), std::string::npos) << m;
+  m = run(image, &status, vtkToothfuseFilter::VOLUME_SCHEME_UNIVERSAL);
+  EXPECT_NE(m.find("toothfuse_session_fuse failed (missing data"), std::string::npos) << m;
 }
 
 }  // namespace
