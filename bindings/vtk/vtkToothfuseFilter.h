@@ -123,7 +123,7 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   /// After an update: the FDI numbers fused, the teeth skipped (with reasons), the warnings of a
   /// fused tooth (registration and fusion; for a tooth split from a per-jaw label image, the
   /// share of its voxels whose assignment was contested) and the report JSON of the last
-  /// successful run (all empty after a failed one).
+  /// successful run (empty after a failed one).
   const std::vector<int>& GetFusedTeeth() const { return this->FusedTeeth; }
   const std::vector<int>& GetSkippedTeeth() const { return this->SkippedTeeth; }
   std::string GetSkippedReason(int fdi) const;
