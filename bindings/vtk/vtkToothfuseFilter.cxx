@@ -1,6 +1,6 @@
-// vtkToothfuseFilter: converts the two VTK inputs to toothfuse C API buffers, runs
-// toothfuse_session_fuse (register + cut + stitch) and converts the fused jaw back. Only the
-// public C API of toothfuse.h is used.
+// vtkToothfuseFilter: converts the two VTK inputs to toothfuse C API buffers (the CBCT either
+// as tooth meshes or as a label volume), runs toothfuse_session_fuse (register + cut + stitch)
+// and converts the fused jaw back. Only the public C API of toothfuse.h is used.
 #include "vtkToothfuseFilter.h"
 
 #include "toothfuse.h"
@@ -13,9 +13,11 @@
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkIdTypeArray.h>
+#include <vtkImageData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkIntArray.h>
+#include <vtkMatrix3x3.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
@@ -24,6 +26,7 @@
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkTriangleFilter.h>
+#include <vtkType.h>
 #include <vtkUnsignedCharArray.h>
 
 #include <cmath>
@@ -164,6 +167,107 @@ bool PrepareJaw(vtkPolyData* input, const char* arrayName, const char* what, Jaw
   return true;
 }
 
+/// A CBCT label image as the arguments of toothfuse_session_add_label_volume. Labels point into
+/// the image's scalars (kept alive by the pipeline during RequestData) or into `copy`.
+struct VolumeBuffers {
+  size_t dims[3] = {0, 0, 0};
+  double voxelToWorld[16] = {};
+  const void* labels = nullptr;
+  size_t count = 0;
+  toothfuse_label_type type = TOOTHFUSE_LABEL_TYPE_INT32;
+  std::vector<int32_t> copy;
+};
+
+/// Fills `out` from the label image `image`; on failure returns false with the reason in `err`.
+bool PrepareVolume(vtkImageData* image, VolumeBuffers& out, std::string& err) {
+  std::ostringstream msg;
+  int dims[3];
+  image->GetDimensions(dims);
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1 || !scalars) {
+    msg << "CBCT image has no voxels or no point scalars (the tooth labels)";
+    err = msg.str();
+    return false;
+  }
+  const char* name = scalars->GetName() ? scalars->GetName() : "(unnamed)";
+  if (scalars->GetNumberOfComponents() != 1) {
+    msg << "CBCT image scalars \"" << name << "\" have " << scalars->GetNumberOfComponents()
+        << " components: a label volume has one integer label per voxel";
+    err = msg.str();
+    return false;
+  }
+  for (int a = 0; a < 3; a++) out.dims[a] = static_cast<size_t>(dims[a]);
+  out.count = out.dims[0] * out.dims[1] * out.dims[2];
+  if (static_cast<size_t>(scalars->GetNumberOfTuples()) != out.count) {
+    msg << "CBCT image scalars \"" << name << "\" hold " << scalars->GetNumberOfTuples()
+        << " values for " << out.count << " voxels";
+    err = msg.str();
+    return false;
+  }
+  // The four label types of the C API are passed as they are; other integers are copied.
+  out.labels = scalars->GetVoidPointer(0);
+  switch (scalars->GetDataType()) {
+    case VTK_UNSIGNED_CHAR:
+      out.type = TOOTHFUSE_LABEL_TYPE_UINT8;
+      break;
+    case VTK_UNSIGNED_SHORT:
+      out.type = TOOTHFUSE_LABEL_TYPE_UINT16;
+      break;
+    case VTK_SHORT:
+      out.type = TOOTHFUSE_LABEL_TYPE_INT16;
+      break;
+    case VTK_INT:
+      out.type = TOOTHFUSE_LABEL_TYPE_INT32;
+      break;
+    case VTK_CHAR:
+    case VTK_SIGNED_CHAR:
+    case VTK_UNSIGNED_INT:
+    case VTK_LONG:
+    case VTK_UNSIGNED_LONG:
+    case VTK_LONG_LONG:
+    case VTK_UNSIGNED_LONG_LONG:
+    case VTK_ID_TYPE:
+      out.copy.resize(out.count);
+      for (size_t i = 0; i < out.count; i++) {
+        const double v = scalars->GetComponent(static_cast<vtkIdType>(i), 0);
+        if (v < 0 || v > 65535) {
+          msg << "CBCT image scalars \"" << name << "\": label " << v << " at voxel " << i
+              << " is outside 0-65535";
+          err = msg.str();
+          return false;
+        }
+        out.copy[i] = static_cast<int32_t>(v);
+      }
+      out.labels = out.copy.data();
+      out.type = TOOTHFUSE_LABEL_TYPE_INT32;
+      break;
+    default:
+      msg << "CBCT image scalars \"" << name << "\" are of type "
+          << scalars->GetDataTypeAsString()
+          << ": a label volume holds integer labels (unsigned char, unsigned short, short or int;"
+             " cast integer-valued float labels with vtkImageCast)";
+      err = msg.str();
+      return false;
+  }
+  // Voxel (i, j, k) of the buffer is structured index extent_min + (i, j, k); world =
+  // origin + direction * diag(spacing) * index.
+  const int* extent = image->GetExtent();
+  const double* spacing = image->GetSpacing();
+  const double* origin = image->GetOrigin();
+  vtkMatrix3x3* direction = image->GetDirectionMatrix();
+  for (int r = 0; r < 3; r++) {
+    double t = origin[r];
+    for (int c = 0; c < 3; c++) {
+      const double a = direction->GetElement(r, c) * spacing[c];
+      out.voxelToWorld[4 * r + c] = a;
+      t += a * extent[2 * c];
+    }
+    out.voxelToWorld[4 * r + 3] = t;
+  }
+  out.voxelToWorld[15] = 1.0;
+  return true;
+}
+
 }  // namespace
 
 vtkToothfuseFilter::vtkToothfuseFilter() {
@@ -178,8 +282,9 @@ vtkToothfuseFilter::~vtkToothfuseFilter() {
   this->SetCBCTLabelArrayName(nullptr);
 }
 
-int vtkToothfuseFilter::FillInputPortInformation(int, vtkInformation* info) {
+int vtkToothfuseFilter::FillInputPortInformation(int port, vtkInformation* info) {
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  if (port == 1) info->Append(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
   return 1;
 }
 
@@ -189,22 +294,31 @@ std::string vtkToothfuseFilter::GetSkippedReason(int fdi) const {
   return std::string();
 }
 
+std::vector<std::string> vtkToothfuseFilter::GetToothWarnings(int fdi) const {
+  auto it = this->ToothWarnings.find(fdi);
+  return it == this->ToothWarnings.end() ? std::vector<std::string>() : it->second;
+}
+
 int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                     vtkInformationVector* outputVector) {
   this->FusedTeeth.clear();
   this->SkippedTeeth.clear();
   this->SkippedReasons.clear();
+  this->ToothWarnings.clear();
   this->ReportJSON.clear();
   this->LastStatus = 0;
   vtkPolyData* iosIn = vtkPolyData::GetData(inputVector[0], 0);
-  vtkPolyData* cbctIn = vtkPolyData::GetData(inputVector[1], 0);
+  vtkImageData* cbctImage = vtkImageData::GetData(inputVector[1], 0);
+  vtkPolyData* cbctIn = cbctImage ? nullptr : vtkPolyData::GetData(inputVector[1], 0);
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
   output->Initialize();
 
   JawBuffers ios, cbct;
+  VolumeBuffers volume;
   std::string err;
   if (!PrepareJaw(iosIn, this->IOSLabelArrayName, "IOS", ios, err) ||
-      !PrepareJaw(cbctIn, this->CBCTLabelArrayName, "CBCT", cbct, err)) {
+      (cbctImage ? !PrepareVolume(cbctImage, volume, err)
+                 : !PrepareJaw(cbctIn, this->CBCTLabelArrayName, "CBCT", cbct, err))) {
     this->LastStatus = static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT);
     vtkErrorMacro(<< err);
     return 0;
@@ -229,14 +343,22 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
     st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction);
     if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_ios_repair");
   }
-  for (auto* jaw : {&ios, &cbct}) {
-    const bool isIos = jaw == &ios;
-    st = toothfuse_session_add_jaw(
-        s, isIos ? TOOTHFUSE_MODALITY_IOS : TOOTHFUSE_MODALITY_CBCT, jaw->vertices,
-        jaw->vertexCount, jaw->stride, jaw->scalar, jaw->indices.data(), jaw->indices.size(),
-        jaw->labels.data(), jaw->labels.size(), jaw->domain);
-    if (st != TOOTHFUSE_STATUS_OK)
-      return failed(isIos ? "toothfuse_session_add_jaw (IOS)" : "toothfuse_session_add_jaw (CBCT)");
+  // The IOS first: a per-jaw label volume is split by the IOS crowns the session holds.
+  auto addJaw = [&](toothfuse_modality modality, const JawBuffers& jaw) {
+    return toothfuse_session_add_jaw(s, modality, jaw.vertices, jaw.vertexCount, jaw.stride,
+                                     jaw.scalar, jaw.indices.data(), jaw.indices.size(),
+                                     jaw.labels.data(), jaw.labels.size(), jaw.domain);
+  };
+  if ((st = addJaw(TOOTHFUSE_MODALITY_IOS, ios)) != TOOTHFUSE_STATUS_OK)
+    return failed("toothfuse_session_add_jaw (IOS)");
+  if (!cbctImage) {
+    if ((st = addJaw(TOOTHFUSE_MODALITY_CBCT, cbct)) != TOOTHFUSE_STATUS_OK)
+      return failed("toothfuse_session_add_jaw (CBCT)");
+  } else {
+    st = toothfuse_session_add_label_volume(
+        s, volume.dims, volume.voxelToWorld, nullptr, nullptr, volume.labels, volume.count,
+        volume.type, static_cast<toothfuse_volume_scheme>(this->VolumeScheme), nullptr);
+    if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_add_label_volume (CBCT)");
   }
 
   toothfuse_options options;
@@ -254,6 +376,18 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   if ((st = toothfuse_session_fused_teeth(s, fdi, 52, &count)) != TOOTHFUSE_STATUS_OK)
     return failed("toothfuse_session_fused_teeth");
   this->FusedTeeth.assign(fdi, fdi + count);
+  for (int f : this->FusedTeeth) {
+    toothfuse_tooth_report report;
+    if ((st = toothfuse_session_tooth_report(s, f, &report)) != TOOTHFUSE_STATUS_OK)
+      return failed("toothfuse_session_tooth_report");
+    std::vector<std::string>& warnings = this->ToothWarnings[f];
+    for (size_t i = 0; i < report.warning_count; i++) {
+      const char* w = nullptr;
+      if ((st = toothfuse_session_tooth_warning(s, f, i, &w)) != TOOTHFUSE_STATUS_OK)
+        return failed("toothfuse_session_tooth_warning");
+      warnings.emplace_back(w ? w : "");
+    }
+  }
   size_t skipped = 0;
   if ((st = toothfuse_session_skipped_count(s, &skipped)) != TOOTHFUSE_STATUS_OK)
     return failed("toothfuse_session_skipped_count");
@@ -333,6 +467,8 @@ void vtkToothfuseFilter::PrintSelf(ostream& os, vtkIndent indent) {
      << (this->CBCTLabelArrayName ? this->CBCTLabelArrayName : "(none)") << "\n";
   os << indent << "Preset: " << (this->Preset == PRESET_PAPER ? "paper" : "default") << "\n";
   os << indent << "Frame: " << (this->Frame == FRAME_IOS ? "IOS" : "CBCT") << "\n";
+  static const char* const schemes[] = {"FDI", "Universal", "ToothFairy2", "DentalSegmentator"};
+  os << indent << "VolumeScheme: " << schemes[this->VolumeScheme] << "\n";
   os << indent << "IOSRepair: " << this->IOSRepair << " (MaxHoleFraction "
      << this->MaxHoleFraction << ")\n";
   os << indent << "AcceptQuestionable: " << this->AcceptQuestionable << "\n";

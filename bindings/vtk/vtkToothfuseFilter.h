@@ -8,26 +8,39 @@
 //   fuse->Update();
 //   vtkPolyData* jaw = fuse->GetOutput();  // point arrays "label" (FDI), "source" (0/1/2)
 //
-// Input port 0: the intraoral scan (IOS) jaw, input port 1: the CBCT teeth. Each is a polydata
-// of polygons (triangles; other polygons and strips are triangulated) with an integer FDI tooth
-// label per point or per cell (0 = gingiva / background, dropped): the array named by
-// IOSLabelArrayName / CBCTLabelArrayName (default "label"), looked up in the point data first,
-// then in the cell data. Coordinates in millimetres; float or double points are passed to the
-// library without conversion.
+// Input port 0: the intraoral scan (IOS) jaw, a polydata of polygons (triangles; other polygons
+// and strips are triangulated) with an integer FDI tooth label per point or per cell (0 =
+// gingiva / background, dropped): the array named by IOSLabelArrayName (default "label"), looked
+// up in the point data first, then in the cell data. Coordinates in millimetres; float or double
+// points are passed to the library without conversion.
+//
+// Input port 1: the CBCT teeth, either
+//  - a polydata like the IOS one (closed teeth; array named by CBCTLabelArrayName), or
+//  - a vtkImageData label volume (a CBCT tooth segmentation): its active point scalars, one
+//    component of an integer type (unsigned char, unsigned short, short and int are passed
+//    without a copy; other integer types are copied as int; float and double are refused),
+//    numbered as VolumeScheme says (FDI by default, Universal, ToothFairy2, or DentalSegmentator's
+//    one teeth class per jaw, split into teeth by the IOS crowns). Its extent, spacing
+//    (millimetres), origin and direction matrix place the voxels in the world frame, which is
+//    the CBCT frame: the library has no LPS/RAS switch, the image's world frame is used as it is.
+//    Each tooth label is surfaced by toothfuse (closed meshes at the mask's 0.5 level).
 //
 // Output port 0: the fused jaw, one closed, manifold mesh per fused tooth (IOS crown + band +
 // CBCT root), double points in the chosen frame, triangles, point arrays "label" (int, FDI) and
 // "source" (unsigned char: 0 IOS crown, 1 band, 2 CBCT root), and field data "skipped_fdi"
 // (int: teeth not fused, see GetSkippedReason) and "toothfuse_report" (string: the report JSON).
 //
-// Errors of the library (bad label, non-manifold tooth, too few teeth, ...) are reported with
-// vtkErrorMacro carrying toothfuse's detailed message, and the request fails with an empty
-// output. The toothfuse session lives only during RequestData and is always freed.
+// Errors of the library (bad label, non-manifold tooth, too few teeth, ...) and inputs the
+// filter cannot pass (missing label array, float or multi-component image scalars, ...) are
+// reported with one vtkErrorMacro carrying the detailed message (toothfuse's own for library
+// errors), GetLastStatus() gives the status, and the request fails with an empty output. The
+// toothfuse session lives only during RequestData and is always freed.
 #ifndef vtkToothfuseFilter_h
 #define vtkToothfuseFilter_h
 
 #include <vtkPolyDataAlgorithm.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,18 +54,39 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   enum Preset { PRESET_PAPER = 0, PRESET_DEFAULT = 1 };
   /// Output frame values (same numbers as TOOTHFUSE_FRAME_* in toothfuse.h).
   enum Frame { FRAME_CBCT = 0, FRAME_IOS = 1 };
+  /// Label volume numbering (same numbers as TOOTHFUSE_VOLUME_SCHEME_* in toothfuse.h).
+  enum VolumeScheme {
+    VOLUME_SCHEME_FDI = 0,
+    VOLUME_SCHEME_UNIVERSAL = 1,
+    VOLUME_SCHEME_TOOTHFAIRY2 = 2,
+    VOLUME_SCHEME_DENTALSEGMENTATOR = 3
+  };
 
-  /// The IOS jaw (input port 0) and the CBCT teeth (input port 1).
+  /// The IOS jaw (input port 0) and the CBCT teeth (input port 1: polydata or label image).
   void SetIOSInputConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(0, output); }
   void SetCBCTInputConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetIOSInputData(vtkDataObject* input) { this->SetInputData(0, input); }
   void SetCBCTInputData(vtkDataObject* input) { this->SetInputData(1, input); }
 
-  /// Name of the integer FDI label array of each input (point data, else cell data).
+  /// Name of the integer FDI label array of each polydata input (point data, else cell data).
   vtkSetStringMacro(IOSLabelArrayName);
   vtkGetStringMacro(IOSLabelArrayName);
   vtkSetStringMacro(CBCTLabelArrayName);
   vtkGetStringMacro(CBCTLabelArrayName);
+
+  /// Numbering of a CBCT label image's values (unused for a polydata CBCT input):
+  /// VOLUME_SCHEME_FDI (default; one label per tooth, STS 2024 and most models), _UNIVERSAL
+  /// (1-32), _TOOTHFAIRY2 (teeth at FDI numbers, other structures skipped) or
+  /// _DENTALSEGMENTATOR (3 upper teeth, 4 lower teeth: each jaw's mask is split into teeth by
+  /// the registered IOS crowns; teeth whose split cannot be trusted are skipped with a reason).
+  vtkSetClampMacro(VolumeScheme, int, VOLUME_SCHEME_FDI, VOLUME_SCHEME_DENTALSEGMENTATOR);
+  vtkGetMacro(VolumeScheme, int);
+  void SetVolumeSchemeToFDI() { this->SetVolumeScheme(VOLUME_SCHEME_FDI); }
+  void SetVolumeSchemeToUniversal() { this->SetVolumeScheme(VOLUME_SCHEME_UNIVERSAL); }
+  void SetVolumeSchemeToToothFairy2() { this->SetVolumeScheme(VOLUME_SCHEME_TOOTHFAIRY2); }
+  void SetVolumeSchemeToDentalSegmentator() {
+    this->SetVolumeScheme(VOLUME_SCHEME_DENTALSEGMENTATOR);
+  }
 
   /// Registration/fusion preset: PRESET_DEFAULT (default, measured better) or PRESET_PAPER.
   vtkSetClampMacro(Preset, int, PRESET_PAPER, PRESET_DEFAULT);
@@ -86,11 +120,14 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   /// TOOTHFUSE_STATUS_UNIT_MISMATCH for input not in millimetres).
   int GetLastStatus() const { return this->LastStatus; }
 
-  /// After an update: the FDI numbers fused, the teeth skipped (with reasons) and the report
-  /// JSON of the last successful run (empty after a failed one).
+  /// After an update: the FDI numbers fused, the teeth skipped (with reasons), the warnings of a
+  /// fused tooth (registration and fusion; for a tooth split from a per-jaw label image, the
+  /// share of its voxels whose assignment was contested) and the report JSON of the last
+  /// successful run (empty after a failed one).
   const std::vector<int>& GetFusedTeeth() const { return this->FusedTeeth; }
   const std::vector<int>& GetSkippedTeeth() const { return this->SkippedTeeth; }
   std::string GetSkippedReason(int fdi) const;
+  std::vector<std::string> GetToothWarnings(int fdi) const;
   const std::string& GetReportJSON() const { return this->ReportJSON; }
 
  protected:
@@ -105,6 +142,7 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   char* CBCTLabelArrayName = nullptr;
   int Preset = PRESET_DEFAULT;
   int Frame = FRAME_CBCT;
+  int VolumeScheme = VOLUME_SCHEME_FDI;
   bool IOSRepair = false;
   double MaxHoleFraction = 0.5;
   bool AcceptQuestionable = false;
@@ -113,6 +151,7 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   std::vector<int> FusedTeeth;
   std::vector<int> SkippedTeeth;
   std::vector<std::string> SkippedReasons;
+  std::map<int, std::vector<std::string>> ToothWarnings;
   std::string ReportJSON;
 
  private:

@@ -10,6 +10,7 @@ mod register;
 mod render;
 mod render_cmd;
 mod render_fused;
+mod render_split;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

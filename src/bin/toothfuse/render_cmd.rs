@@ -21,7 +21,11 @@ pub struct RenderArgs {
     /// Instead: before/after of one tooth (CBCT-only vs fused, seam close-up coloured by source).
     #[arg(long)]
     fused: bool,
-    /// Tooth of the --fused picture (FDI; default the first fused tooth).
+    /// Instead: a tooth split out of a per-jaw teeth mask and fused (the real STS 2024 mask's
+    /// lower teeth as one class, on a phantom of those teeth; needs the real data folder).
+    #[arg(long, conflicts_with = "fused")]
+    split: bool,
+    /// Tooth of the --fused or --split picture (FDI; default the first fused tooth).
     #[arg(long)]
     tooth: Option<u8>,
 }
@@ -35,6 +39,9 @@ const CBCT: [f64; 3] = [0.55, 0.68, 0.86];
 pub fn run(a: &RenderArgs) -> Result<()> {
     if a.fused {
         return crate::render_fused::run(&a.phantom, a.tooth, &a.out, a.width);
+    }
+    if a.split {
+        return crate::render_split::run(&a.phantom, a.tooth, &a.out, a.width);
     }
     let ph = a.phantom.generate()?;
     let labels = ph.ios.vertex_labels.clone().unwrap_or_default();
