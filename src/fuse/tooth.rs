@@ -300,20 +300,48 @@ struct Assembled {
     untangle: Option<super::untangle::UntangleReport>,
 }
 
-/// Crown faces (indices below `band.start`) in the crossing pairs the untangling left.
-fn crown_faces_hit(a: &Assembled) -> Vec<u32> {
+/// Crown faces (indices below `band.start`) to trim for the crossing pairs the untangling left:
+/// the crown faces in a pair, or with `ring` those and every crown face sharing a vertex with
+/// one (where trimming the faces alone has not cleared the band, it mostly crosses their
+/// neighbours next); when no pair has a crown face (band with band or root), the crown faces at
+/// the margin vertices of its band faces, so that the margin there moves and the band is laid
+/// out anew.
+fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) -> Vec<u32> {
     let Some(u) = &a.untangle else {
         return Vec::new();
     };
-    let mut v: Vec<u32> = u
+    let is_crown = |f: u32| (f as usize) < a.band.start;
+    let corners = |f: u32| a.mesh.triangles[f as usize].into_iter();
+    let mut hit: Vec<u32> = u
         .crossing_pairs
         .iter()
         .flat_map(|&(f, g)| [f, g])
-        .filter(|&f| (f as usize) < a.band.start)
+        .filter(|&f| is_crown(f))
         .collect();
-    v.sort_unstable();
-    v.dedup();
-    v
+    if !ring && !hit.is_empty() {
+        hit.sort_unstable();
+        hit.dedup();
+        return hit;
+    }
+    let mut at: Vec<u32> = hit.into_iter().flat_map(corners).collect();
+    if at.is_empty() {
+        at = u
+            .crossing_pairs
+            .iter()
+            .flat_map(|&(f, g)| [f, g])
+            .filter(|&f| a.band.contains(&(f as usize)))
+            .flat_map(corners)
+            .filter(|&x| (x as usize) < crown_vertices)
+            .collect();
+    }
+    at.sort_unstable();
+    at.dedup();
+    if at.is_empty() {
+        return Vec::new();
+    }
+    (0..a.band.start as u32)
+        .filter(|&f| corners(f).any(|x| at.binary_search(&x).is_ok()))
+        .collect()
 }
 
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
@@ -333,14 +361,22 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     };
     let mut trimmed = ct.trimmed;
     // Where the band cannot clear a crown face within the fringe, that face goes (with the faces
-    // between it and the margin) and the band is built again on the new margin.
-    let mut attempt = 0;
-    let a = loop {
+    // between it and the margin) and the band is built again on the new margin. Of the attempts,
+    // the one with the fewest crossings left is kept (the earliest, least trimmed, on a tie).
+    let mut best: Option<(Assembled, super::fringe::FringeTrim)> = None;
+    for attempt in 1..=6 {
         let a = assemble(ct, &side, opts)?;
-        let hits = crown_faces_hit(&a);
-        attempt += 1;
-        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt > 3 {
-            break a;
+        let left = |a: &Assembled| a.untangle.as_ref().map_or(0, |u| u.crossings_after);
+        let hits = if left(&a) > 0 {
+            crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
+        } else {
+            Vec::new()
+        };
+        if best.as_ref().is_none_or(|(b, _)| left(&a) < left(b)) {
+            best = Some((a, trimmed));
+        }
+        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == 6 {
+            break;
         }
         let Some((crown, map, t)) = super::fringe::trim_fringe(
             &side.crown,
@@ -349,7 +385,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             opts.fringe_reach_mm,
             &hits,
         ) else {
-            break a;
+            break;
         };
         let margin = boundary_loops(&crown)
             .into_iter()
@@ -366,7 +402,8 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             margin,
             ios_vertex: map,
         };
-    };
+    }
+    let (a, trimmed) = best.expect("at least one attempt");
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
