@@ -58,6 +58,11 @@ fn check(
         if !added.is_empty() {
             println!("{what}: {} crossing pairs added", added.len());
         }
+        assert_eq!(
+            q.band_crossings_left,
+            added.len(),
+            "{what}: the report's band_crossings_left against the pairs found"
+        );
         assert!(
             added.len() <= b.added_pairs,
             "{what}: {} crossing pairs added by the fusion: {:?}",

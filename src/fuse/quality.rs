@@ -48,6 +48,9 @@ pub struct ToothQuality {
     pub ios_trim_reach_mm: f64,
     /// CBCT faces removed by the crown cut.
     pub cbct_faces_removed: usize,
+    /// Intersecting face pairs with a band face that the band rebuilds and the untangling left
+    /// (exact test; 0 when the band adds no crossing, or when the untangling is off).
+    pub band_crossings_left: usize,
 }
 
 impl ToothQuality {

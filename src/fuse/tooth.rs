@@ -410,6 +410,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             trimmed.vertices - ct.trimmed.vertices
         ));
     }
+    let crossings_left = a.untangle.as_ref().map_or(0, |u| u.crossings_after);
     if let Some(u) = a.untangle.as_ref().filter(|u| u.crossings_after > 0) {
         warnings.push(format!(
             "{} intersecting face pairs with a band face left after untangling ({} before)",
@@ -431,6 +432,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     q.ios_vertices_trimmed = trimmed.vertices;
     q.ios_trim_reach_mm = trimmed.max_reach_mm;
     q.cbct_faces_removed = rc.removed_faces;
+    q.band_crossings_left = crossings_left;
     if !(q.closed && q.manifold && q.components == 1) {
         let topo = EdgeTopology::new(&mesh);
         let bad: Vec<String> = topo
