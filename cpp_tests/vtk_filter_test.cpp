@@ -99,6 +99,18 @@ struct Demo {
   bool ok = false;
 };
 
+/// Boundary and non-manifold edges of `mesh`, by VTK's vtkFeatureEdges (0: closed, manifold).
+vtkIdType open_or_non_manifold_edges(vtkPolyData* mesh) {
+  vtkNew<vtkFeatureEdges> fe;
+  fe->SetInputData(mesh);
+  fe->BoundaryEdgesOn();
+  fe->NonManifoldEdgesOn();
+  fe->FeatureEdgesOff();
+  fe->ManifoldEdgesOff();
+  fe->Update();
+  return fe->GetOutput()->GetNumberOfCells();
+}
+
 /// jaw_<k> of the demo_jaws fixture as VTK inputs.
 Demo& demo(int k) {
   static std::map<int, Demo> cache;
@@ -198,14 +210,7 @@ vtkSmartPointer<vtkPolyData> fuse_demo(Demo& d, int frame) {
     EXPECT_TRUE(s == 0 || s == 1 || s == 2) << "point " << i << " source " << s;
   }
   EXPECT_EQ(labels, d.expected);
-  vtkNew<vtkFeatureEdges> fe;  // the whole jaw: closed and manifold
-  fe->SetInputData(out);
-  fe->BoundaryEdgesOn();
-  fe->NonManifoldEdgesOn();
-  fe->FeatureEdgesOff();
-  fe->ManifoldEdgesOff();
-  fe->Update();
-  EXPECT_EQ(fe->GetOutput()->GetNumberOfCells(), 0);
+  EXPECT_EQ(open_or_non_manifold_edges(out), 0);  // the whole jaw: closed and manifold
   return out;
 }
 
@@ -218,14 +223,7 @@ std::map<int, std::vector<Key>> check_teeth(const Demo& d, vtkPolyData* out, int
     vtkSmartPointer<vtkPolyData> t = tooth_of(out, fdi);
     EXPECT_GT(t->GetNumberOfCells(), 0);
     if (t->GetNumberOfCells() == 0) continue;
-    vtkNew<vtkFeatureEdges> fe;
-    fe->SetInputData(t);
-    fe->BoundaryEdgesOn();
-    fe->NonManifoldEdgesOn();
-    fe->FeatureEdgesOff();
-    fe->ManifoldEdgesOff();
-    fe->Update();
-    EXPECT_EQ(fe->GetOutput()->GetNumberOfCells(), 0) << "boundary or non-manifold edges";
+    EXPECT_EQ(open_or_non_manifold_edges(t), 0) << "boundary or non-manifold edges";
     vtkNew<vtkPolyDataConnectivityFilter> cc;
     cc->SetInputData(t);
     cc->SetExtractionModeToAllRegions();
@@ -470,14 +468,7 @@ std::map<int, ImageToothFacts> fuse_image(Demo& d, int k, vtkImageData* cbct, in
   EXPECT_EQ(std::set<int>(f->GetFusedTeeth().begin(), f->GetFusedTeeth().end()), d.expected);
   auto out = vtkSmartPointer<vtkPolyData>::New();
   out->ShallowCopy(f->GetOutput());
-  vtkNew<vtkFeatureEdges> fe;  // the whole jaw: closed and manifold
-  fe->SetInputData(out);
-  fe->BoundaryEdgesOn();
-  fe->NonManifoldEdgesOn();
-  fe->FeatureEdgesOff();
-  fe->ManifoldEdgesOff();
-  fe->Update();
-  EXPECT_EQ(fe->GetOutput()->GetNumberOfCells(), 0);
+  EXPECT_EQ(open_or_non_manifold_edges(out), 0);  // the whole jaw: closed and manifold
   auto roots = check_teeth(d, out, 2);
 
   std::map<int, ImageToothFacts> facts;

@@ -8,7 +8,8 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 use std::path::Path;
 use toothfuse::TriMesh;
-use toothfuse::pipeline::{self, PipelineOptions};
+use toothfuse::fuse::FusedTooth;
+use toothfuse::pipeline::{self, PipelineOptions, PipelineResult};
 
 const IOS: Rgb = [0.93, 0.88, 0.74];
 const BAND: Rgb = [0.95, 0.45, 0.20];
@@ -26,10 +27,8 @@ fn slab(m: &TriMesh, axis: DVec3, lo: f64, hi: f64) -> TriMesh {
     TriMesh::new(m.positions.clone(), triangles)
 }
 
-/// Renders the picture to `out`.
-pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Result<()> {
-    let ph = ph_args.generate()?;
-    let r = pipeline::fuse(&ph.ios, &ph.cbct, &PipelineOptions::default())?;
+/// The fused tooth `tooth` of `r`, or its first fused tooth when `None`.
+pub fn fused_tooth(r: &PipelineResult, tooth: Option<u8>) -> Result<(u8, &FusedTooth)> {
     let fdi = match tooth {
         Some(t) => t,
         None => *r.jaw.teeth.keys().next().context("no tooth was fused")?,
@@ -39,6 +38,14 @@ pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Re
         .teeth
         .get(&fdi)
         .with_context(|| format!("tooth {fdi} was not fused"))?;
+    Ok((fdi, f))
+}
+
+/// Renders the picture to `out`.
+pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Result<()> {
+    let ph = ph_args.generate()?;
+    let r = pipeline::fuse(&ph.ios, &ph.cbct, &PipelineOptions::default())?;
+    let (fdi, f) = fused_tooth(&r, tooth)?;
     let truth = ph.truth.teeth.get(&fdi).context("tooth not in the truth")?;
     let reg = &r.registration.teeth[&fdi];
     let cbct = ph.cbct[&fdi].transformed(&reg.cbct_to_output);

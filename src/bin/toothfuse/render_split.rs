@@ -70,15 +70,7 @@ pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Re
             .map(|(f, t)| (f, t.mesh))
             .collect();
     let r = pipeline::fuse(&ph.ios, &teeth, &PipelineOptions::default())?;
-    let fdi = match tooth {
-        Some(t) => t,
-        None => *r.jaw.teeth.keys().next().context("no tooth was fused")?,
-    };
-    let f = r
-        .jaw
-        .teeth
-        .get(&fdi)
-        .with_context(|| format!("tooth {fdi} was not fused"))?;
+    let (fdi, f) = crate::render_fused::fused_tooth(&r, tooth)?;
 
     // Views: the arch from the front and above (occlusal axis up), the tooth from its buccal side.
     let axis = ph
