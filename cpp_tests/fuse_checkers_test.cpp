@@ -163,6 +163,11 @@ std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f) {
   if (reach > 0.3 || trimmed * 200 > crown.size() / 3)
     return "trimmed " + std::to_string(trimmed) + " vertices up to " + std::to_string(reach) +
            " mm from the margin; ";
+  // No crossing added by the fusion (the contract), as the library counts it.
+  size_t band = 0, own = 0;
+  if (toothfuse_session_fused_crossings(s.get(), fdi, &band, &own) != TOOTHFUSE_STATUS_OK)
+    return "no crossing report; ";
+  if (band != 0) return std::to_string(band) + " crossing pairs with a band face; ";
   return "";
 }
 

@@ -810,6 +810,22 @@ toothfuse_status toothfuse_session_fused_quality(const struct toothfuse_session 
                                                  struct toothfuse_fused_quality *quality_out);
 
 /**
+ * Writes the intersecting face pairs of fused tooth `fdi` by origin: to `*band_out` the pairs
+ * with a band face that the fusion could not remove (0 when the output contract's "no crossing
+ * added" holds for this tooth), to `*ios_out` the pairs of two kept IOS crown faces (the input
+ * crown's own crossings, kept as given). Both exact; the first is counted during the fusion,
+ * the second on this call (an all-pairs check of the crown: ~10–20 ms for 15 000 faces).
+ * WRONG_STATE before a fuse; MISSING_DATA (with the reason) for a tooth that was not fused.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `band_out` and `ios_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_crossings(const struct toothfuse_session *session,
+                                                   int32_t fdi,
+                                                   size_t *band_out,
+                                                   size_t *ios_out);
+
+/**
  * Writes how much of fused tooth `fdi`'s IOS crown was trimmed from its margin fringe: the
  * number of IOS crown vertices dropped (folded over other crown faces, or crossed by the band)
  * to `*vertices_out` and the largest geodesic distance (mm) of a dropped vertex from the original

@@ -9,8 +9,8 @@ use glam::DVec3;
 use std::collections::BTreeSet;
 use std::ffi::CStr;
 use std::ptr;
-use toothfuse::Rigid;
 use toothfuse::ffi::*;
+use toothfuse::{Rigid, TriMesh};
 
 fn fused_teeth(s: &Session) -> Vec<i32> {
     let mut out = [0i32; 52];
@@ -183,6 +183,21 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
             "{trimmed} {reach}"
         );
         assert_eq!(kept.len() + trimmed, crown.len() / 3, "tooth {fdi}");
+        // The crossings by origin add up to all the fused mesh's crossing pairs (the CBCT root
+        // itself does not cross).
+        let (mut band, mut own) = (usize::MAX, usize::MAX);
+        // SAFETY: live session, valid out pointers.
+        let st = unsafe { toothfuse_session_fused_crossings(s.0, fdi, &mut band, &mut own) };
+        assert_eq!(st, toothfuse_status::Ok);
+        let fused = TriMesh::new(
+            pos.clone(),
+            tri.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        );
+        assert_eq!(
+            band + own,
+            toothfuse::mesh_check::self_intersections(&fused).len(),
+            "tooth {fdi}: band {band}, crown {own}"
+        );
         let missing = crown
             .chunks_exact(3)
             .map(|c| ios_to_output.apply(DVec3::new(c[0], c[1], c[2])))
@@ -244,6 +259,14 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
     let st = unsafe { toothfuse_session_fused_trim(s.0, fdis[0], ptr::null_mut(), &mut reach) };
     assert_eq!(st, toothfuse_status::NullParameter);
     assert!(s.error().contains("vertices_out"), "{}", s.error());
+    let mut band = 0usize;
+    // SAFETY: live session; a NULL out pointer is refused, a tooth not fused is named.
+    let st = unsafe { toothfuse_session_fused_crossings(s.0, fdis[0], &mut band, ptr::null_mut()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    assert!(s.error().contains("ios_out"), "{}", s.error());
+    // SAFETY: as above.
+    let st = unsafe { toothfuse_session_fused_crossings(s.0, 48, &mut band, &mut trimmed) };
+    assert_eq!(st, toothfuse_status::MissingData);
     let bad = toothfuse_options {
         frame: 2,
         ..toothfuse_options::default()

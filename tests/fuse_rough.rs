@@ -49,12 +49,17 @@ fn check(
         let what = format!("{tag}: tooth {fdi}");
         assert!(q.closed && q.manifold && q.components == 1, "{what}: {q:?}");
         assert!(q.volume > 0.0, "{what}: volume {}", q.volume);
-        let added: Vec<(u32, u32)> = self_intersections(&t.mesh)
-            .into_iter()
-            .filter(|&(a, b)| {
-                (a as usize) >= t.band_faces.start || (b as usize) >= t.band_faces.start
-            })
-            .collect();
+        let (added, own): (Vec<_>, Vec<_>) =
+            self_intersections(&t.mesh)
+                .into_iter()
+                .partition(|&(a, b)| {
+                    (a as usize) >= t.band_faces.start || (b as usize) >= t.band_faces.start
+                });
+        assert_eq!(
+            t.ios_self_intersections(),
+            own.len(),
+            "{what}: the report's ios_self_intersections against the crown pairs found"
+        );
         if !added.is_empty() {
             println!("{what}: {} crossing pairs added", added.len());
         }

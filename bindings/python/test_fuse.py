@@ -75,6 +75,9 @@ class FuseTest(unittest.TestCase):
                 self.assertEqual(len(crowns[fdi]) - len(crown), q["ios_vertices_trimmed"])
                 self.assertLessEqual(q["ios_trim_reach_mm"], 0.3)
                 self.assertEqual(q["crown_vertices"], len(crown))
+                # No crossing added by the fusion; the phantom's crowns do not cross themselves.
+                self.assertEqual(q["band_crossings_left"], 0)
+                self.assertEqual(q["ios_self_intersections"], 0)
                 # IOS frame: the IOS -> output transform is the identity.
                 self.assertEqual(jaw.transforms[fdi]["ios_to_output"],
                                  [1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0])

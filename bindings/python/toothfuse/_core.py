@@ -202,6 +202,8 @@ _quality = _fn("toothfuse_session_fused_quality", _st, _S, ctypes.c_int32,
                ctypes.POINTER(_FusedQuality))
 _trim = _fn("toothfuse_session_fused_trim", _st, _S, ctypes.c_int32,
             ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_double))
+_crossings = _fn("toothfuse_session_fused_crossings", _st, _S, ctypes.c_int32,
+                 ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_size_t))
 
 
 def version():
@@ -571,7 +573,9 @@ class Session:
         """Quality of a fused tooth as a dict (closed, manifold, watertight, components,
         boundary_edges, volume, self_intersections (None when not checked), ...,
         ios_vertices_trimmed and ios_trim_reach_mm: IOS crown vertices dropped from the folded
-        margin fringe and their largest distance from the margin in mm)."""
+        margin fringe and their largest distance from the margin in mm; band_crossings_left:
+        intersecting face pairs with a band face the fusion left, 0 when it added none;
+        ios_self_intersections: the input crown's own intersecting face pairs, kept)."""
         q = _FusedQuality()
         self._check(_quality(self._h, fdi, ctypes.byref(q)))
         d = {name: getattr(q, name) for name, _ in _FusedQuality._fields_}
@@ -581,6 +585,10 @@ class Session:
         self._check(_trim(self._h, fdi, ctypes.byref(trimmed), ctypes.byref(reach)))
         d["ios_vertices_trimmed"] = trimmed.value
         d["ios_trim_reach_mm"] = reach.value
+        band, own = ctypes.c_size_t(), ctypes.c_size_t()
+        self._check(_crossings(self._h, fdi, ctypes.byref(band), ctypes.byref(own)))
+        d["band_crossings_left"] = band.value
+        d["ios_self_intersections"] = own.value
         return d
 
 
