@@ -74,21 +74,27 @@ impl Grid {
         }
     }
 
-    /// Ids in the 3×3 cells around `p` (may repeat).
+    /// Whether `f` holds for every id in the 3×3 cells around `p` (ids may repeat). The answer
+    /// does not depend on the order, so the likeliest failures are tried first: `p`'s own cell,
+    /// and in each cell the ids inserted last (the sample grows outward from the margin, so the
+    /// newest points are the nearest).
     fn near(&self, p: [f64; 2], mut f: impl FnMut(u32) -> bool) -> bool {
+        const ORDER: [(i64, i64); 9] = [
+            (0, 0),
+            (-1, 0),
+            (1, 0),
+            (0, -1),
+            (0, 1),
+            (-1, -1),
+            (1, -1),
+            (-1, 1),
+            (1, 1),
+        ];
         let (cx, cy) = self.cell_of(p);
-        for dy in -1..=1 {
-            for dx in -1..=1 {
-                if let Some(i) = self.index(cx + dx, cy + dy) {
-                    for &id in &self.cells[i] {
-                        if !f(id) {
-                            return false;
-                        }
-                    }
-                }
-            }
-        }
-        true
+        ORDER.iter().all(|&(dx, dy)| {
+            self.index(cx + dx, cy + dy)
+                .is_none_or(|i| self.cells[i].iter().rev().all(|&id| f(id)))
+        })
     }
 }
 
