@@ -115,13 +115,10 @@ fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
         let fused =
             fuse_jaw(&p.ios, &p.cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         let tag = format!("seed {seed} {jaw:?} {} {}", variant.name(), export.name());
-        // Measured: one coarse lower incisor (seed 20, tooth 31) fails its cut ("cut loop winds
-        // 0.00 times"); every other tooth of these jaws is fused (none lost to label noise or
-        // holes).
-        for (f, e) in &fused.failed {
-            println!("{tag}: tooth {f} failed: {e}");
-        }
-        assert!(fused.failed.len() <= 1, "{tag}: failed {:?}", fused.failed);
+        // Every tooth of these jaws is fused: none lost to label noise or holes, and the coarse
+        // lower incisor whose ragged margin tilts its plane 49° off the tooth (seed 20, tooth 31)
+        // is cut about the CBCT tooth's long axis instead.
+        assert!(fused.failed.is_empty(), "{tag}: failed {:?}", fused.failed);
         let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
         println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");
     }

@@ -239,7 +239,25 @@ fn cut_inner(
         .iter()
         .map(|&v| crown.positions[v as usize])
         .collect();
-    let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
+    let mut frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
+    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around
+    // the tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then no
+    // cut goes around the tooth. The CBCT tooth's long axis (a tooth is 2-3 times longer than
+    // wide) bounds it: beyond `MAX_AXIS_TILT_DEG` from it, the long axis is the frame's axis.
+    if let Some((_, long)) = crate::geom::principal_axis(&root_in.positions) {
+        let long = if long.dot(frame.axis) < 0.0 {
+            -long
+        } else {
+            long
+        };
+        let tilt = frame.axis.angle_between(long).to_degrees();
+        if tilt > MAX_AXIS_TILT_DEG {
+            warnings.push(format!(
+                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis; the long axis is the tooth axis"
+            ));
+            frame = ToothFrame::new(frame.center, long);
+        }
+    }
     // The crown lies to the left of its margin seen from outside: counter-clockwise about the
     // axis. If not, the crown is inward-oriented: flip it (positions untouched).
     if stitch::param::winding(&frame, &margin_pts) < 0.0 {
@@ -481,6 +499,10 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         stitch_ms,
     })
 }
+
+/// Largest angle (degrees) between the margin plane's normal and the CBCT tooth's long axis
+/// for the normal to be the tooth axis.
+const MAX_AXIS_TILT_DEG: f64 = 45.0;
 
 fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
     margin.iter().map(|&v| mesh.positions[v as usize]).collect()

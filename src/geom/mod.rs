@@ -48,6 +48,27 @@ pub fn centroid(points: &[DVec3]) -> Option<DVec3> {
     Some(sum / points.len() as f64)
 }
 
+/// The centroid of `points` and their principal axis (unit eigenvector of the largest
+/// eigenvalue of their scatter matrix; its sign is arbitrary), or `None` without points.
+pub fn principal_axis(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
+    let c = centroid(points)?;
+    let mut m = nalgebra::Matrix3::<f64>::zeros();
+    for p in points {
+        let d = *p - c;
+        let v = nalgebra::Vector3::new(d.x, d.y, d.z);
+        m += v * v.transpose();
+    }
+    let eig = m.symmetric_eigen();
+    let mut best = 0;
+    for k in 1..3 {
+        if eig.eigenvalues[k] > eig.eigenvalues[best] {
+            best = k;
+        }
+    }
+    let a = eig.eigenvectors.column(best);
+    Some((c, DVec3::new(a[0], a[1], a[2]).normalize()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::round;

@@ -179,26 +179,6 @@ pub fn point_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     (p - (a + ab * (vb * denom) + ac * (vc * denom))).length()
 }
 
-/// Principal axis (largest variance) of a point set and its centroid.
-fn principal_axis(points: &[DVec3]) -> (DVec3, DVec3) {
-    let c = crate::geom::centroid(points).unwrap_or(DVec3::ZERO);
-    let mut m = nalgebra::Matrix3::<f64>::zeros();
-    for p in points {
-        let d = *p - c;
-        let v = nalgebra::Vector3::new(d.x, d.y, d.z);
-        m += v * v.transpose();
-    }
-    let eig = m.symmetric_eigen();
-    let mut best = 0;
-    for k in 1..3 {
-        if eig.eigenvalues[k] > eig.eigenvalues[best] {
-            best = k;
-        }
-    }
-    let a = eig.eigenvectors.column(best);
-    (c, DVec3::new(a[0], a[1], a[2]).normalize())
-}
-
 /// The real teeth placed for simulation in a canonical jaw frame (occlusal direction ±Z), and
 /// the rotation `canon` from the caller's world frame to it.
 pub struct RealJaw {
@@ -227,7 +207,8 @@ pub fn prepare(anatomy: &BTreeMap<u8, TriMesh>, jaw: Jaw, rng: &mut Rng) -> Resu
         if m.triangles.is_empty() {
             return Err(Error::MissingData("empty tooth mesh".into()).in_tooth(fdi));
         }
-        let (c, mut a) = principal_axis(&m.positions);
+        let (c, mut a) = crate::geom::principal_axis(&m.positions)
+            .ok_or_else(|| Error::MissingData("empty tooth mesh".into()).in_tooth(fdi))?;
         let ts: Vec<f64> = m.positions.iter().map(|p| (*p - c).dot(a)).collect();
         let (tmin, tmax) = ts
             .iter()
