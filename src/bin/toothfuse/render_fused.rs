@@ -27,6 +27,18 @@ fn slab(m: &TriMesh, axis: DVec3, lo: f64, hi: f64) -> TriMesh {
     TriMesh::new(m.positions.clone(), triangles)
 }
 
+/// Per vertex of fused tooth `f`: the colour of its source (IOS crown, band, CBCT root).
+pub fn source_colors(f: &FusedTooth) -> Vec<Rgb> {
+    f.source
+        .iter()
+        .map(|&s| match s {
+            0 => IOS,
+            1 => BAND,
+            _ => CBCT,
+        })
+        .collect()
+}
+
 /// The fused tooth `tooth` of `r`, or its first fused tooth when `None`.
 pub fn fused_tooth(r: &PipelineResult, tooth: Option<u8>) -> Result<(u8, &FusedTooth)> {
     let fdi = match tooth {
@@ -64,15 +76,7 @@ pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Re
         look: -buccal,
         up: axis,
     };
-    let colors: Vec<Rgb> = f
-        .source
-        .iter()
-        .map(|&s| match s {
-            0 => IOS,
-            1 => BAND,
-            _ => CBCT,
-        })
-        .collect();
+    let colors = source_colors(f);
     let h = w * 4 / 3;
     let before = render(&[Item::uniform(&cbct, CBCT)], view, w, h);
     let after = render(

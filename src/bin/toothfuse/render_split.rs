@@ -21,8 +21,7 @@ use toothfuse::volume::{
 /// The STS 2024 mask, relative to the real data folder.
 const STS_MASK: &str = "cbct_toothseg_sts2024/Validation_0001_Mask.nii.gz";
 
-const IOS: Rgb = [0.93, 0.88, 0.74];
-const BAND: Rgb = [0.95, 0.45, 0.20];
+/// The per-jaw mask's colour (the CBCT colour of the fused tooth).
 const CBCT: Rgb = [0.55, 0.68, 0.86];
 /// Colours of the split teeth, in turn.
 const PALETTE: [Rgb; 4] = [
@@ -116,15 +115,7 @@ pub fn run(ph_args: &PhantomArgs, tooth: Option<u8>, out: &Path, w: usize) -> Re
         .map(|(i, m)| Item::uniform(m, PALETTE[i % PALETTE.len()]))
         .collect();
     let split_img = render(&parts, arch_view, w, h);
-    let colors: Vec<Rgb> = f
-        .source
-        .iter()
-        .map(|&s| match s {
-            0 => IOS,
-            1 => BAND,
-            _ => CBCT,
-        })
-        .collect();
+    let colors = crate::render_fused::source_colors(f);
     let fused = render(
         &[Item {
             mesh: &f.mesh,
