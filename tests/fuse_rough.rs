@@ -116,8 +116,9 @@ fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
             fuse_jaw(&p.ios, &p.cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         let tag = format!("seed {seed} {jaw:?} {} {}", variant.name(), export.name());
         // Every tooth of these jaws is fused: none lost to label noise or holes, and the coarse
-        // lower incisor whose ragged margin tilts its plane 49° off the tooth (seed 20, tooth 31)
-        // is cut about the CBCT tooth's long axis instead.
+        // lower incisor whose ragged margin tilts its plane 49° off the tooth (seed 20, tooth 31),
+        // whose cut about that plane's normal does not go around the tooth, is cut again about
+        // the CBCT tooth's long axis.
         assert!(fused.failed.is_empty(), "{tag}: failed {:?}", fused.failed);
         let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
         println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");

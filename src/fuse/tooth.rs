@@ -240,24 +240,6 @@ fn cut_inner(
         .map(|&v| crown.positions[v as usize])
         .collect();
     let mut frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
-    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around
-    // the tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then no
-    // cut goes around the tooth. The CBCT tooth's long axis (a tooth is 2-3 times longer than
-    // wide) bounds it: beyond `MAX_AXIS_TILT_DEG` from it, the long axis is the frame's axis.
-    if let Some((_, long)) = crate::geom::principal_axis(&root_in.positions) {
-        let long = if long.dot(frame.axis) < 0.0 {
-            -long
-        } else {
-            long
-        };
-        let tilt = frame.axis.angle_between(long).to_degrees();
-        if tilt > MAX_AXIS_TILT_DEG {
-            warnings.push(format!(
-                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis; the long axis is the tooth axis"
-            ));
-            frame = ToothFrame::new(frame.center, long);
-        }
-    }
     // The crown lies to the left of its margin seen from outside: counter-clockwise about the
     // axis. If not, the crown is inward-oriented: flip it (positions untouched).
     if stitch::param::winding(&frame, &margin_pts) < 0.0 {
@@ -276,9 +258,36 @@ fn cut_inner(
             "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
         ));
     }
-    let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
     // Crown removal.
-    let rc = cut::cut_crown(&root_in, &margin_pts_of(&crown, &margin), &frame, &opts.cut)?;
+    let margin_pts = margin_pts_of(&crown, &margin);
+    let mut rc = cut::cut_crown(&root_in, &margin_pts, &frame, &opts.cut)?;
+    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
+    // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then the cut
+    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis
+    // when the two are more than `MAX_AXIS_TILT_DEG` apart (a tooth that cuts well keeps its
+    // margin frame: a molar's long axis can lie across it).
+    if !winds_once(&frame, &rc)
+        && let Some((_, long)) = crate::geom::principal_axis(&root_in.positions)
+    {
+        let long = if long.dot(frame.axis) < 0.0 {
+            -long
+        } else {
+            long
+        };
+        let tilt = frame.axis.angle_between(long).to_degrees();
+        let long_frame = ToothFrame::new(frame.center, long);
+        if tilt > MAX_AXIS_TILT_DEG
+            && let Ok(r) = cut::cut_crown(&root_in, &margin_pts, &long_frame, &opts.cut)
+            && winds_once(&long_frame, &r)
+        {
+            warnings.push(format!(
+                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis and the cut about it did not go around the tooth: cut about the long axis"
+            ));
+            frame = long_frame;
+            rc = r;
+        }
+    }
+    let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
     let root_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
     let chords = loop_chords(&crown, &margin, BandVertex::Upper)
         .into_iter()
@@ -503,6 +512,12 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
 /// Largest angle (degrees) between the margin plane's normal and the CBCT tooth's long axis
 /// for the normal to be the tooth axis.
 const MAX_AXIS_TILT_DEG: f64 = 45.0;
+
+/// Whether the root's cut loop goes once around the tooth axis (either way), as the band needs.
+fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
+    let w = stitch::param::winding(frame, &margin_pts_of(&rc.root, &rc.cut_loop));
+    (w.abs() - 1.0).abs() < 0.5
+}
 
 fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {
     margin.iter().map(|&v| mesh.positions[v as usize]).collect()
