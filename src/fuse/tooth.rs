@@ -406,13 +406,15 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let mut best: Option<(Assembled, super::fringe::FringeTrim)> = None;
     for attempt in 1..=6 {
         let a = assemble(ct, &side, opts)?;
-        let left = |a: &Assembled| a.untangle.as_ref().map_or(0, |u| u.crossings_after);
-        let hits = if left(&a) > 0 {
+        let hits = if crossings_left(&a) > 0 {
             crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
         } else {
             Vec::new()
         };
-        if best.as_ref().is_none_or(|(b, _)| left(&a) < left(b)) {
+        if best
+            .as_ref()
+            .is_none_or(|(b, _)| crossings_left(&a) < crossings_left(b))
+        {
             best = Some((a, trimmed));
         }
         if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == 6 {
@@ -450,7 +452,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             trimmed.vertices - ct.trimmed.vertices
         ));
     }
-    let crossings_left = a.untangle.as_ref().map_or(0, |u| u.crossings_after);
+    let band_crossings_left = crossings_left(&a);
     if let Some(u) = a.untangle.as_ref().filter(|u| u.crossings_after > 0) {
         warnings.push(format!(
             "{} intersecting face pairs with a band face left after untangling ({} before)",
@@ -472,7 +474,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     q.ios_vertices_trimmed = trimmed.vertices;
     q.ios_trim_reach_mm = trimmed.max_reach_mm;
     q.cbct_faces_removed = rc.removed_faces;
-    q.band_crossings_left = crossings_left;
+    q.band_crossings_left = band_crossings_left;
     if !(q.closed && q.manifold && q.components == 1) {
         let topo = EdgeTopology::new(&mesh);
         let bad: Vec<String> = topo
@@ -516,7 +518,12 @@ const MAX_AXIS_TILT_DEG: f64 = 45.0;
 /// Whether the root's cut loop goes once around the tooth axis (either way), as the band needs.
 fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
     let w = stitch::param::winding(frame, &margin_pts_of(&rc.root, &rc.cut_loop));
-    (w.abs() - 1.0).abs() < 0.5
+    stitch::param::once_around(w).is_some()
+}
+
+/// Intersecting face pairs with a band face the untangling left (0 without untangling).
+fn crossings_left(a: &Assembled) -> usize {
+    a.untangle.as_ref().map_or(0, |u| u.crossings_after)
 }
 
 fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {

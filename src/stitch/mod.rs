@@ -119,14 +119,12 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
     let order = |pts: &[DVec3], what: &str| -> Result<Vec<u32>> {
         let w = param::winding(frame, pts);
         let n = pts.len() as u32;
-        if (w - 1.0).abs() < 0.5 {
-            Ok((0..n).collect())
-        } else if (w + 1.0).abs() < 0.5 {
-            Ok((0..n).rev().collect())
-        } else {
-            Err(Error::InvalidArgument(format!(
+        match param::once_around(w) {
+            Some(true) => Ok((0..n).collect()),
+            Some(false) => Ok((0..n).rev().collect()),
+            None => Err(Error::InvalidArgument(format!(
                 "{what} loop winds {w:.2} times around the tooth axis, expected once"
-            )))
+            ))),
         }
     };
     let uo = order(loops.upper, "margin")?;

@@ -46,6 +46,18 @@ pub fn winding(frame: &ToothFrame, pts: &[DVec3]) -> f64 {
     unwrapped_angles(frame, pts).1 / std::f64::consts::TAU
 }
 
+/// Whether a closed loop with winding `w` (see [`winding`]) goes once around the tooth axis:
+/// `Some(true)` counter-clockwise, `Some(false)` clockwise, `None` otherwise.
+pub fn once_around(w: f64) -> Option<bool> {
+    if (w - 1.0).abs() < 0.5 {
+        Some(true)
+    } else if (w + 1.0).abs() < 0.5 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 fn cumulative_length(pts: &[DVec3]) -> (Vec<f64>, f64) {
     let mut c = Vec::with_capacity(pts.len());
     let mut s = 0.0;
