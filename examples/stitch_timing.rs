@@ -5,7 +5,8 @@
 //! for bit, faces, sources) to show a speed-up left the output byte-identical.
 //!
 //! `cargo run --release --example stitch_timing [CASE_DIR ...]` (no argument: every foreign case
-//! and a rough and a coarse phantom jaw).
+//! and a rough and a coarse phantom jaw). `STITCH_TIMING_ONLY="Coarse tooth 26"` stitches only
+//! the teeth whose line would contain that text.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -34,7 +35,11 @@ fn checksum(f: &toothfuse::fuse::FusedTooth) -> u64 {
 fn report(name: &str, cut: &CutJaw, opts: &FuseOptions) {
     let mut total = 0.0;
     let mut all = 0u64;
+    let only = std::env::var("STITCH_TIMING_ONLY").unwrap_or_default();
     for (fdi, ct) in &cut.teeth {
+        if !format!("{name} tooth {fdi}").contains(&only) {
+            continue;
+        }
         let t0 = Instant::now();
         let r = stitch_tooth(ct, opts);
         let ms = t0.elapsed().as_secs_f64() * 1e3;

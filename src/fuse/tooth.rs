@@ -455,8 +455,14 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let band_crossings_left = crossings_left(&a);
     if let Some(u) = a.untangle.as_ref().filter(|u| u.crossings_after > 0) {
         warnings.push(format!(
-            "{} intersecting face pairs with a band face left after untangling ({} before)",
-            u.crossings_after, u.crossings_before
+            "{} intersecting face pairs with a band face left after untangling ({} before{})",
+            u.crossings_after,
+            u.crossings_before,
+            if u.budget_spent {
+                "; its bounded work spent"
+            } else {
+                ""
+            }
         ));
     }
     let Assembled {

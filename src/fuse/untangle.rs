@@ -5,7 +5,9 @@
 //! star to the best of a few candidate positions, every candidate checked exactly
 //! ([`triangles_intersect`]) against the faces around it: a move is kept only if its star crosses
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
-//! vertices (IOS margin, CBCT cut) never move.
+//! vertices (IOS margin, CBCT cut) never move. The exact tests that score candidates are
+//! budgeted ([`TESTS_PER_BAND_FACE`] per band face): on a band that cannot be untangled the
+//! rounds stop when it is spent, so the work stays proportional to the band whatever the input.
 
 use super::band_crossings::{Recount, band_region, bbox, count_all, overlap};
 use super::band_opt::min_angle;
@@ -25,7 +27,16 @@ pub struct UntangleReport {
     pub moves: usize,
     /// The intersecting pairs left (face indices, band face or not), sorted.
     pub crossing_pairs: Vec<(u32, u32)>,
+    /// Exact triangle-triangle tests run to score candidate positions.
+    pub tests: usize,
+    /// Whether the test budget ran out before the rounds ended.
+    pub budget_spent: bool,
 }
+
+/// Exact triangle-triangle tests allowed per band face for scoring candidate moves: the
+/// untangling's work is bounded by the band's size whatever the input (a clean band needs
+/// none; a folded foreign margin a few hundred per face).
+pub const TESTS_PER_BAND_FACE: usize = 500;
 
 /// Directions (unnormalized): the 6 axes and 8 diagonals of a cube, in (t1, t2, normal).
 const SPHERE: [(f64, f64, f64); 14] = [
@@ -88,6 +99,8 @@ pub fn untangle_band(
     // After the first full count, only the pairs of the faces moved since are tested again.
     let recount = Recount::new(mesh, band.clone(), scale, 8.0 * scale);
     let mut changed: Vec<u32> = Vec::new();
+    let full_budget = TESTS_PER_BAND_FACE * band.len();
+    let mut budget = full_budget;
     let count = |mesh: &TriMesh, pairs: &[(u32, u32)], changed: &mut Vec<u32>, first: bool| {
         changed.sort_unstable();
         changed.dedup();
@@ -122,7 +135,11 @@ pub fn untangle_band(
         let mut moved = 0;
         for v in verts {
             let k = (v - movable.start) as usize;
-            if improve_vertex(mesh, v, &star[k], &grid, scale) {
+            if budget == 0 {
+                report.budget_spent = true;
+                break;
+            }
+            if improve_vertex(mesh, v, &star[k], &grid, scale, &mut budget) {
                 moved += 1;
                 changed.extend_from_slice(&star[k]);
                 // Its neighbours may do better now.
@@ -138,10 +155,12 @@ pub fn untangle_band(
             }
         }
         report.moves += moved;
-        if moved == 0 {
+        report.budget_spent |= budget == 0;
+        if moved == 0 || report.budget_spent {
             break;
         }
     }
+    report.tests = full_budget - budget;
     if report.moves > 0 {
         // Recount after the last round's moves.
         let pairs = count(mesh, &report.crossing_pairs, &mut changed, false);
@@ -231,16 +250,17 @@ impl Around {
 
 /// `(crossings of the star with its surroundings, star faces turned over against `normals`,
 /// smallest star angle)` with `v` where it is. Counting stops past `max_folded` turned-over
-/// faces or `max_crossings` crossings (the candidate has lost by then): `None`. Each pair of
-/// star faces found among `around` counts once.
+/// faces or `max_crossings` crossings (the candidate has lost by then), or when `budget` exact
+/// tests are spent: `None`. Each pair of star faces found among `around` counts once.
 fn score(
     mesh: &TriMesh,
     star: &[u32],
     normals: &[DVec3],
     around: &Around,
-    max_folded: usize,
-    max_crossings: usize,
+    limits: (usize, usize),
+    budget: &mut usize,
 ) -> Option<(usize, usize, f64)> {
+    let (max_folded, max_crossings) = limits;
     let mut ang = 180.0f64;
     let mut folded = 0;
     let mut boxes = Vec::with_capacity(star.len());
@@ -258,6 +278,10 @@ fn score(
     }
     let mut crossings = 0;
     let mut count = |f: u32, g: u32| {
+        if *budget == 0 {
+            return true;
+        }
+        *budget -= 1;
         if triangles_intersect(mesh, f as usize, g as usize) {
             crossings += 1;
         }
@@ -286,6 +310,7 @@ fn improve_vertex(
     star: &[u32],
     grid: &TriangleGrid,
     scale: f64,
+    budget: &mut usize,
 ) -> bool {
     let vi = v as usize;
     let p0 = mesh.positions[vi];
@@ -318,7 +343,14 @@ fn improve_vertex(
     }
     let grow = DVec3::splat(0.5 * scale);
     let around = Around::new(mesh, star, &grid.faces_in_box(lo - grow, hi + grow));
-    let Some(current) = score(mesh, star, &normals, &around, usize::MAX, usize::MAX) else {
+    let Some(current) = score(
+        mesh,
+        star,
+        &normals,
+        &around,
+        (usize::MAX, usize::MAX),
+        budget,
+    ) else {
         return false;
     };
     let centroid = ring
@@ -390,7 +422,10 @@ fn improve_vertex(
             continue;
         }
         mesh.positions[vi] = c;
-        let Some(s) = score(mesh, star, &normals, &around, current.1, best.0.0) else {
+        let Some(s) = score(mesh, star, &normals, &around, (current.1, best.0.0), budget) else {
+            if *budget == 0 {
+                break;
+            }
             continue;
         };
         if better(key(s), best.0) {
@@ -433,6 +468,58 @@ mod tests {
     }
 
     /// A sliver (free apex almost on its base) is opened up.
+    /// A band that cannot be untangled (a flat grid of band faces pierced everywhere by a dense
+    /// pleated sheet of fixed faces): the rounds stop when the test budget is spent, and the
+    /// band is not left worse than it came.
+    #[test]
+    fn hopeless_band_costs_a_bounded_number_of_tests() {
+        let n = 10;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                positions.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut triangles = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let band = 0..triangles.len();
+        // Every grid vertex is free; the sheet's vertices (fixed) come after them.
+        let free = 0..positions.len() as u32;
+        // The sheet: strips along y at x = k / 4 + 0.1, zig-zagging through z = 0.
+        for k in 0..4 * n {
+            let x = k as f64 / 4.0 + 0.1;
+            let base = positions.len() as u32;
+            for j in 0..=4 * n {
+                let y = j as f64 / 4.0;
+                let dx = if j % 2 == 0 { 0.05 } else { -0.05 };
+                positions.push(DVec3::new(x + dx, y, -0.3));
+                positions.push(DVec3::new(x - dx, y, 0.3));
+            }
+            for j in 0..4 * n as u32 {
+                let (a, b, c, d) = (
+                    base + 2 * j,
+                    base + 2 * j + 1,
+                    base + 2 * j + 2,
+                    base + 2 * j + 3,
+                );
+                triangles.push([a, c, b]);
+                triangles.push([b, c, d]);
+            }
+        }
+        let mut m = TriMesh::new(positions, triangles);
+        let r = untangle_band(&mut m, band.clone(), free, 5.0);
+        assert!(r.crossings_before > 500, "{r:?}");
+        assert!(r.budget_spent, "{r:?}");
+        assert!(r.tests <= TESTS_PER_BAND_FACE * band.len(), "{}", r.tests);
+        assert!(r.crossings_after <= r.crossings_before);
+    }
+
     #[test]
     fn raises_a_tiny_angle() {
         let positions = vec![
