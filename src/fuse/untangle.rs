@@ -35,8 +35,8 @@ pub struct UntangleReport {
 
 /// Exact triangle-triangle tests allowed per band face for scoring candidate moves: the
 /// untangling's work is bounded by the band's size whatever the input (a clean band needs
-/// none; a folded foreign margin a few hundred per face).
-pub const TESTS_PER_BAND_FACE: usize = 500;
+/// none; a folded foreign margin a few hundred per face, rarely over a thousand on a coarse one).
+pub const TESTS_PER_BAND_FACE: usize = 2000;
 
 /// Directions (unnormalized): the 6 axes and 8 diagonals of a cube, in (t1, t2, normal).
 const SPHERE: [(f64, f64, f64); 14] = [
