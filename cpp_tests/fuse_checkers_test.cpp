@@ -128,9 +128,22 @@ std::string openmesh_check(const Fused& f) {
   return err;
 }
 
+// What the crown check allows: the share of a crown's vertices trimmed from its margin fringe,
+// and the crossing pairs with a band face the library reports left.
+struct CrownLimits {
+  double maxTrimShare;
+  size_t maxBandCrossings;
+  bool dropsAllowed;  // stray tooth-labelled islands the crown repair gives back to the gingiva
+};
+// The contract on the clean phantom: at most 0.5 % trimmed, no crossing added, nothing dropped.
+constexpr CrownLimits kClean{0.005, 0, false};
+
 // Every IOS crown vertex of the session, mapped by IOS->output, is a source-IOS vertex (to
-// 1e-9 mm: the library applies the same transform in Rust).
-std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f) {
+// 1e-9 mm: the library applies the same transform in Rust), except the ones the library reports
+// trimmed from the margin fringe (all within 0.3 mm of the margin); the trims and the band's
+// crossings the library reports stay within `lim`.
+std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f,
+                        const CrownLimits& lim = kClean) {
   tf::Mat4 m{};
   if (toothfuse_session_transform(s.get(), fdi, TOOTHFUSE_TRANSFORM_IOS_TO_OUTPUT, m.data()) !=
       TOOTHFUSE_STATUS_OK)
@@ -157,17 +170,22 @@ std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f) {
   double reach = 0;
   if (toothfuse_session_fused_trim(s.get(), fdi, &trimmed, &reach) != TOOTHFUSE_STATUS_OK)
     return "no trim report; ";
-  if (missing != trimmed)
+  size_t dropped = 0;
+  if (toothfuse_session_fused_dropped(s.get(), fdi, &dropped) != TOOTHFUSE_STATUS_OK)
+    return "no dropped-vertex report; ";
+  if (dropped > 0 && !lim.dropsAllowed)
+    return std::to_string(dropped) + " IOS crown vertices dropped by the repair; ";
+  if (missing != trimmed + dropped)
     return std::to_string(missing) + " IOS crown vertices missing, " + std::to_string(trimmed) +
-           " reported trimmed; ";
-  if (reach > 0.3 || trimmed * 200 > crown.size() / 3)
-    return "trimmed " + std::to_string(trimmed) + " vertices up to " + std::to_string(reach) +
-           " mm from the margin; ";
-  // No crossing added by the fusion (the contract), as the library counts it.
+           " reported trimmed, " + std::to_string(dropped) + " dropped; ";
+  if (reach > 0.3 || static_cast<double>(trimmed) > lim.maxTrimShare * (crown.size() / 3))
+    return "trimmed " + std::to_string(trimmed) + " of " + std::to_string(crown.size() / 3) +
+           " vertices up to " + std::to_string(reach) + " mm from the margin; ";
+  // No crossing added by the fusion (the contract on clean crowns), as the library counts it.
   size_t band = 0, own = 0;
   if (toothfuse_session_fused_crossings(s.get(), fdi, &band, &own) != TOOTHFUSE_STATUS_OK)
     return "no crossing report; ";
-  if (band != 0) return std::to_string(band) + " crossing pairs with a band face; ";
+  if (band > lim.maxBandCrossings) return std::to_string(band) + " crossing pairs with a band face; ";
   return "";
 }
 
@@ -219,6 +237,59 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
   // Every tooth present in both modalities fuses (measured: 219 of 219 with the chart band;
   // 3 lower incisors failed with the earlier loft band) and passes both checkers.
   EXPECT_EQ(failed, 0u) << "fusion failures";
+}
+
+// Two rough IOS exports (rough_jaws fixture: a rough partial upper arch and a coarse lower arch
+// with missing teeth): every tooth in both modalities fuses, closed and manifold for VTK and
+// OpenMesh, with every IOS crown vertex kept but the ones reported trimmed (all within 0.3 mm of
+// the margin) or dropped (label-noise islands apart from the crown). Measured: the coarse crowns lose up to ~7 % of their vertices to the fringe trim (the
+// 0.5 % of the clean contract is not met there) and some teeth keep crossing pairs with a band
+// face (the library reports them; the Rust test fuse_rough bounds them at 30 per tooth).
+TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
+  const char* dir = std::getenv("TOOTHFUSE_ROUGH_JAWS_DIR");
+  ASSERT_NE(dir, nullptr) << "TOOTHFUSE_ROUGH_JAWS_DIR unset (the rough_jaws fixture sets it)";
+  const CrownLimits rough{0.08, 30, true};
+  size_t jaws = 0, teeth = 0, crossings = 0, trimmedTeeth = 0;
+  for (int k = 0;; k++) {
+    std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
+    if (!std::ifstream(jd + "/ios.ply").good()) break;
+    tf::Session s;
+    ASSERT_TRUE(tf::load_demo(s, jd, false)) << jd;
+    ASSERT_EQ(toothfuse_session_fuse(s.get(), nullptr), TOOTHFUSE_STATUS_OK)
+        << jd << ": " << s.error();
+    jaws++;
+    int32_t fdis[52];
+    size_t n = 0;
+    ASSERT_EQ(toothfuse_session_fused_teeth(s.get(), fdis, 52, &n), TOOTHFUSE_STATUS_OK);
+    size_t nskip = 0;
+    ASSERT_EQ(toothfuse_session_skipped_count(s.get(), &nskip), TOOTHFUSE_STATUS_OK);
+    for (size_t i = 0; i < nskip; i++) {
+      int32_t f = 0;
+      const char* why = nullptr;
+      ASSERT_EQ(toothfuse_session_skipped(s.get(), i, &f, &why), TOOTHFUSE_STATUS_OK);
+      EXPECT_NE(std::string(why).rfind("fusion failed", 0), 0u)
+          << jd << ": tooth " << f << " lost: " << why;
+    }
+    for (size_t i = 0; i < n; i++) {
+      Fused f = fused(s, fdis[i]);
+      std::string err = vtk_check(f) + openmesh_check(f) + crown_check(s, fdis[i], f, rough);
+      EXPECT_TRUE(err.empty()) << jd << " tooth " << fdis[i] << ": " << err;
+      size_t band = 0, own = 0, trimmed = 0;
+      double reach = 0;
+      ASSERT_EQ(toothfuse_session_fused_crossings(s.get(), fdis[i], &band, &own),
+                TOOTHFUSE_STATUS_OK);
+      ASSERT_EQ(toothfuse_session_fused_trim(s.get(), fdis[i], &trimmed, &reach),
+                TOOTHFUSE_STATUS_OK);
+      crossings += band;
+      trimmedTeeth += trimmed > 0;
+      teeth++;
+    }
+  }
+  std::printf("rough exports: %zu fused teeth of %zu jaws, %zu with trimmed fringe vertices, %zu "
+              "crossing pairs with a band face left in all\n",
+              teeth, jaws, trimmedTeeth, crossings);
+  EXPECT_EQ(jaws, 2u);
+  EXPECT_GE(teeth, 12u);
 }
 
 // The cut root of tooth `fdi` (the cut stage's result) and its cut loop.

@@ -22,6 +22,13 @@
 #include <stdint.h>
 
 /**
+ * Exact triangle-triangle tests allowed per band face for scoring candidate moves: the
+ * untangling's work is bounded by the band's size whatever the input (a clean band needs
+ * none; a folded foreign margin a few hundred per face, rarely over a thousand on a coarse one).
+ */
+#define TESTS_PER_BAND_FACE 2000
+
+/**
  * Per-vertex source of a fused mesh vertex (`uint8_t`): the IOS crown.
  */
 #define TOOTHFUSE_SOURCE_IOS 0
@@ -316,7 +323,8 @@ typedef struct toothfuse_fused_quality {
   size_t band_faces;
   /**
    * IOS crown vertices kept: all of them except the ones trimmed from the margin fringe
-   * (see `toothfuse_session_fused_trim`).
+   * (see `toothfuse_session_fused_trim`) and the ones the crown repair dropped (see
+   * `toothfuse_session_fused_dropped`).
    */
   size_t crown_vertices;
   /**
@@ -840,6 +848,21 @@ toothfuse_status toothfuse_session_fused_trim(const struct toothfuse_session *se
                                               int32_t fdi,
                                               size_t *vertices_out,
                                               double *reach_mm_out);
+
+/**
+ * Writes to `*vertices_out` the number of fused tooth `fdi`'s IOS crown vertices that the crown
+ * repair dropped: stray tooth-labelled islands apart from the crown (a segmentation tool's
+ * label noise, given back to the gingiva) and vertices in no face; 0 on a clean crown. With the
+ * trimmed ones (`toothfuse_session_fused_trim`) these are all the crown's input vertices missing
+ * from the fused mesh. WRONG_STATE before a fuse; MISSING_DATA (with the reason) for a tooth that
+ * was not fused.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `vertices_out` NULL or writable.
+ */
+toothfuse_status toothfuse_session_fused_dropped(const struct toothfuse_session *session,
+                                                 int32_t fdi,
+                                                 size_t *vertices_out);
 
 /**
  * Writes the vertex count and the index count (3 per triangle) of tooth `fdi` of `modality`.

@@ -182,6 +182,12 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
             trimmed * 200 <= crown.len() / 3 && reach <= 0.3,
             "{trimmed} {reach}"
         );
+        let mut dropped = usize::MAX;
+        // SAFETY: live session, valid out pointer.
+        let st = unsafe { toothfuse_session_fused_dropped(s.0, fdi, &mut dropped) };
+        assert_eq!(st, toothfuse_status::Ok);
+        // The clean phantom's crowns have no stray label islands: nothing dropped.
+        assert_eq!(dropped, 0, "tooth {fdi}");
         assert_eq!(kept.len() + trimmed, crown.len() / 3, "tooth {fdi}");
         // The crossings by origin add up to all the fused mesh's crossing pairs (the CBCT root
         // itself does not cross).
@@ -259,6 +265,13 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
     let st = unsafe { toothfuse_session_fused_trim(s.0, fdis[0], ptr::null_mut(), &mut reach) };
     assert_eq!(st, toothfuse_status::NullParameter);
     assert!(s.error().contains("vertices_out"), "{}", s.error());
+    // SAFETY: live session; a NULL out pointer is refused, a tooth not fused is named.
+    let st = unsafe { toothfuse_session_fused_dropped(s.0, fdis[0], ptr::null_mut()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    assert!(s.error().contains("vertices_out"), "{}", s.error());
+    // SAFETY: as above.
+    let st = unsafe { toothfuse_session_fused_dropped(s.0, 48, &mut trimmed) };
+    assert_eq!(st, toothfuse_status::MissingData);
     let mut band = 0usize;
     // SAFETY: live session; a NULL out pointer is refused, a tooth not fused is named.
     let st = unsafe { toothfuse_session_fused_crossings(s.0, fdis[0], &mut band, ptr::null_mut()) };

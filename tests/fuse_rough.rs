@@ -85,6 +85,15 @@ fn check(
                 );
             }
         }
+        // Every input crown vertex is accounted for: kept (bitwise, above), trimmed from the
+        // fringe, or dropped by the repair (label-noise islands apart from the crown).
+        let kept = t.ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
+        assert_eq!(kept, q.crown_vertices, "{what}: kept IOS vertices");
+        assert_eq!(
+            kept + q.ios_vertices_trimmed + q.ios_vertices_dropped,
+            input.positions.len(),
+            "{what}: kept + trimmed + dropped against the input crown"
+        );
         let n = q.crown_vertices + q.ios_vertices_trimmed;
         assert!(
             q.ios_vertices_trimmed as f64 <= b.trimmed_share * n as f64,

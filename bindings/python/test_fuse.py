@@ -73,6 +73,7 @@ class FuseTest(unittest.TestCase):
                 # trimmed from the folded margin fringe (none or a few, within 0.3 mm).
                 self.assertTrue(set(crown) <= crowns[fdi])
                 self.assertEqual(len(crowns[fdi]) - len(crown), q["ios_vertices_trimmed"])
+                self.assertEqual(q["ios_vertices_dropped"], 0)
                 self.assertLessEqual(q["ios_trim_reach_mm"], 0.3)
                 self.assertEqual(q["crown_vertices"], len(crown))
                 # No crossing added by the fusion; the phantom's crowns do not cross themselves.

@@ -351,7 +351,8 @@ pub struct toothfuse_fused_quality {
     /// Band triangles.
     pub band_faces: usize,
     /// IOS crown vertices kept: all of them except the ones trimmed from the margin fringe
-    /// (see `toothfuse_session_fused_trim`).
+    /// (see `toothfuse_session_fused_trim`) and the ones the crown repair dropped (see
+    /// `toothfuse_session_fused_dropped`).
     pub crown_vertices: usize,
     /// Every edge in exactly two faces.
     pub closed: bool,
@@ -458,6 +459,33 @@ pub unsafe extern "C" fn toothfuse_session_fused_trim(
                 write_out(vertices_out, q.ios_vertices_trimmed, "vertices_out")?;
                 write_out(reach_mm_out, q.ios_trim_reach_mm, "reach_mm_out")
             }
+        };
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_session(session, body) }
+    }
+}
+
+/// Writes to `*vertices_out` the number of fused tooth `fdi`'s IOS crown vertices that the crown
+/// repair dropped: stray tooth-labelled islands apart from the crown (a segmentation tool's
+/// label noise, given back to the gingiva) and vertices in no face; 0 on a clean crown. With the
+/// trimmed ones (`toothfuse_session_fused_trim`) these are all the crown's input vertices missing
+/// from the fused mesh. WRONG_STATE before a fuse; MISSING_DATA (with the reason) for a tooth that
+/// was not fused.
+///
+/// # Safety
+/// `session` must be NULL or a live session; `vertices_out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_fused_dropped(
+    session: *const toothfuse_session,
+    fdi: i32,
+    vertices_out: *mut usize,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        let body = |s: &Session| -> FfiResult {
+            check_out(vertices_out, "vertices_out")?;
+            let q = &fused_tooth(s, fdi)?.quality;
+            // SAFETY: forwarded contract on `vertices_out`.
+            unsafe { write_out(vertices_out, q.ios_vertices_dropped, "vertices_out") }
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session(session, body) }

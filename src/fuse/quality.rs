@@ -36,7 +36,8 @@ pub struct ToothQuality {
     pub band_edge_max: f64,
     /// Number of band triangles.
     pub band_faces: usize,
-    /// IOS crown vertices kept: all of them except the ones trimmed from the margin fringe.
+    /// IOS crown vertices kept: all of them except the ones trimmed from the margin fringe
+    /// (`ios_vertices_trimmed`) and the ones the crown repair dropped (`ios_vertices_dropped`).
     pub crown_vertices: usize,
     /// Small crown holes filled.
     pub holes_filled: usize,
@@ -46,6 +47,10 @@ pub struct ToothQuality {
     /// Largest geodesic distance (mm) from the original margin of a trimmed IOS vertex (0 when
     /// none was trimmed).
     pub ios_trim_reach_mm: f64,
+    /// IOS crown vertices the crown repair dropped: stray tooth-labelled islands apart from the
+    /// crown (a segmentation tool's label noise, given back to the gingiva) and vertices in no
+    /// face (0 on a clean crown).
+    pub ios_vertices_dropped: usize,
     /// CBCT faces removed by the crown cut.
     pub cbct_faces_removed: usize,
     /// Intersecting face pairs with a band face that the band rebuilds and the untangling left

@@ -62,6 +62,7 @@ pub struct CutTooth {
     frame: ToothFrame,
     ios_vertex: Vec<u32>,
     kept_ios: usize,
+    dropped: usize,
     holes_filled: usize,
     trimmed: super::fringe::FringeTrim,
     dist_in: Vec<f64>,
@@ -302,6 +303,7 @@ fn cut_inner(
         frame,
         ios_vertex,
         kept_ios,
+        dropped,
         holes_filled: rep.filled_holes,
         trimmed,
         dist_in,
@@ -475,10 +477,14 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let (band_start, band_end) = (band.start, band.end);
     let rc = &ct.root;
     let mut q = quality::measure(&mesh, band_start..band_end, opts.check_self_intersections);
-    q.crown_vertices = ct.kept_ios;
+    // The band rebuilds may have trimmed more of the fringe than the cut did.
+    q.crown_vertices = ct
+        .kept_ios
+        .saturating_sub(trimmed.vertices - ct.trimmed.vertices);
     q.holes_filled = ct.holes_filled;
     q.ios_vertices_trimmed = trimmed.vertices;
     q.ios_trim_reach_mm = trimmed.max_reach_mm;
+    q.ios_vertices_dropped = ct.dropped;
     q.cbct_faces_removed = rc.removed_faces;
     q.band_crossings_left = band_crossings_left;
     if !(q.closed && q.manifold && q.components == 1) {

@@ -202,6 +202,8 @@ _quality = _fn("toothfuse_session_fused_quality", _st, _S, ctypes.c_int32,
                ctypes.POINTER(_FusedQuality))
 _trim = _fn("toothfuse_session_fused_trim", _st, _S, ctypes.c_int32,
             ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_double))
+_dropped = _fn("toothfuse_session_fused_dropped", _st, _S, ctypes.c_int32,
+               ctypes.POINTER(ctypes.c_size_t))
 _crossings = _fn("toothfuse_session_fused_crossings", _st, _S, ctypes.c_int32,
                  ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_size_t))
 
@@ -573,7 +575,9 @@ class Session:
         """Quality of a fused tooth as a dict (closed, manifold, watertight, components,
         boundary_edges, volume, self_intersections (None when not checked), ...,
         ios_vertices_trimmed and ios_trim_reach_mm: IOS crown vertices dropped from the folded
-        margin fringe and their largest distance from the margin in mm; band_crossings_left:
+        margin fringe and their largest distance from the margin in mm; ios_vertices_dropped:
+        IOS crown vertices the crown repair dropped (stray tooth-labelled islands given back to
+        the gingiva, vertices in no face); band_crossings_left:
         intersecting face pairs with a band face the fusion left, 0 when it added none;
         ios_self_intersections: the input crown's own intersecting face pairs, kept)."""
         q = _FusedQuality()
@@ -585,6 +589,9 @@ class Session:
         self._check(_trim(self._h, fdi, ctypes.byref(trimmed), ctypes.byref(reach)))
         d["ios_vertices_trimmed"] = trimmed.value
         d["ios_trim_reach_mm"] = reach.value
+        dropped = ctypes.c_size_t()
+        self._check(_dropped(self._h, fdi, ctypes.byref(dropped)))
+        d["ios_vertices_dropped"] = dropped.value
         band, own = ctypes.c_size_t(), ctypes.c_size_t()
         self._check(_crossings(self._h, fdi, ctypes.byref(band), ctypes.byref(own)))
         d["band_crossings_left"] = band.value
