@@ -97,12 +97,14 @@ pub mod rng;
 mod rough;
 mod shape;
 mod surface_nets;
+mod voxelize;
 
 pub use cbct::CbctRealism;
 pub use grid::Grid;
 pub use ios::IosRealism;
 pub use rough::{IosExport, IosRoughness};
 pub use surface_nets::{extract_closed, largest_component, surface_nets};
+pub use voxelize::{VoxelizeOptions, voxelize};
 
 use crate::arch::Jaw;
 use crate::mesh::{LabeledMesh, TriMesh};
