@@ -5,9 +5,8 @@
 //! meet only where the mask joins them. Later floods also make steps dearer far from the
 //! tooth's long-axis line ([`Growth`]), so that a tooth that reaches a neighbour through a
 //! contact does not run down the neighbour's root. The plain flood keeps, for every voxel, the
-//! best two crowns; a voxel whose runner-up is within `margin` mm of the winner, or that the
-//! axis prior moved to another tooth, is contested (the mask and the crowns do not tell which
-//! tooth it belongs to).
+//! best two crowns; a voxel whose two paths there are within `margin` mm of each other is
+//! contested (the mask and the crowns do not tell which tooth it belongs to).
 
 use super::arch_fit::Sample;
 use super::mask::{FACES, JawMask};
@@ -241,8 +240,7 @@ pub struct ToothSplit {
     pub voxels: usize,
     /// Of them, voxels inside its registered IOS crown (seeds).
     pub seed_voxels: usize,
-    /// Of them, voxels whose assignment is contested (see the module doc), the moved ones
-    /// included.
+    /// Of them, voxels whose assignment is contested (see the module doc).
     pub contested_voxels: usize,
     /// Of them, voxels the long-axis prior moved to this tooth from the tooth the plain flood
     /// gave them.
@@ -267,6 +265,11 @@ impl ToothSplit {
     /// Share of the tooth's voxels not under its crown.
     pub fn outside_share(&self) -> f64 {
         self.outside_voxels as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Share of the tooth's voxels the long-axis prior moved to it.
+    pub fn moved_share(&self) -> f64 {
+        self.moved_voxels as f64 / self.voxels.max(1) as f64
     }
 
     /// Share of the tooth's boundary drawn by the split (faces to another tooth's voxels)
@@ -319,9 +322,9 @@ pub(crate) fn outside_footprint(
 }
 
 /// Per tooth, its voxel counts; and the number of mask voxels no seed reached. `best` is the
-/// final assignment, `plain` the flood without the long-axis prior: a voxel is contested when
-/// that flood's runner-up path is within `margin_mm` of its winner's, or when the prior moved it
-/// to another tooth (either way the mask and the crowns alone do not tell whose it is).
+/// final assignment, `plain` the flood without the long-axis prior (whose path costs are mm): a
+/// voxel is contested when that flood ranks its tooth first or second and the two paths are
+/// within `margin_mm` of each other; it is moved when that flood gave it another tooth.
 pub(crate) fn tally(
     mask: &JawMask,
     best: &[u8],
@@ -354,15 +357,17 @@ pub(crate) fn tally(
             t.seed_voxels += 1;
             continue;
         }
-        let rival = if plain.best[id] != a {
-            t.moved_voxels += 1;
-            plain.best[id]
-        } else if plain.second[id] != 0 && plain.second_cost[id] - plain.best_cost[id] <= margin_mm
-        {
+        t.moved_voxels += (plain.best[id] != a) as usize;
+        let rival = if plain.best[id] == a {
             plain.second[id]
         } else {
-            continue;
+            plain.best[id]
         };
+        let close = plain.second_cost[id] - plain.best_cost[id] <= margin_mm;
+        let ranked = plain.best[id] == a || plain.second[id] == a;
+        if rival == 0 || plain.second[id] == 0 || !close || !ranked {
+            continue;
+        }
         t.contested_voxels += 1;
         *rivals.entry((a, rival)).or_default() += 1;
     }

@@ -117,7 +117,8 @@ impl SplitVolume {
     }
 
     /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested,
-    /// outside-footprint and interface (boundary drawn by the split) shares and, when refused, the reason (`null` otherwise).
+    /// outside-footprint, interface (boundary drawn by the split) and moved (by the long-axis prior)
+    /// shares and, when refused, the reason (`null` otherwise).
     pub fn to_json(&self) -> String {
         let jaws: Vec<serde_json::Value> = self
             .jaws
@@ -133,6 +134,7 @@ impl SplitVolume {
                             "contested_share": t.contested_share(),
                             "outside_share": t.outside_share(),
                             "interface_share": t.interface_share(),
+                            "moved_share": t.moved_share(),
                             "refused": j.refused.get(fdi),
                         })
                     })
