@@ -553,10 +553,10 @@ TEST(VtkToothfuseFilter, FusesPerToothLabelImageOnObliqueGrid) {
 
 // The same teeth as DentalSegmentator's upper-teeth class 3 (unsigned char scalars): the mask is
 // split into teeth by the registered IOS crowns, then fused; each tooth's split share of
-// contested voxels is among its warnings. The split is not exact where teeth touch: measured,
-// 14% of tooth 11's root points lie on tooth 21 at the midline contact (over 0.5 mm from 11's own
-// CBCT tooth; 1.1% of 11's voxels reported contested), under 3% for the other teeth, and the
-// TRE equals the per-tooth path's (the registration uses the crowns).
+// contested voxels is among its warnings. Where 11 and 21 touch at the midline, the split's
+// long-axis floods keep 11 off 21's root: measured, no tooth's root points over 0.5 mm from its
+// own CBCT tooth (before them, 14% of 11's root points lay on 21 with 1.1% of its voxels
+// contested), and the TRE equals the per-tooth path's (the registration uses the crowns).
 TEST(VtkToothfuseFilter, FusesPerJawTeethMaskSplitByTheIos) {
   Demo& d = demo(2);
   ASSERT_TRUE(d.ok);
@@ -569,7 +569,7 @@ TEST(VtkToothfuseFilter, FusesPerJawTeethMaskSplitByTheIos) {
   for (const auto& t : facts) {
     SCOPED_TRACE("tooth " + std::to_string(t.first));
     farShare += t.second.rootFarShare / static_cast<double>(facts.size());
-    EXPECT_LT(t.second.rootFarShare, 0.2) << "root points off the tooth's own CBCT tooth";
+    EXPECT_LT(t.second.rootFarShare, 0.02) << "root points off the tooth's own CBCT tooth";
     EXPECT_LT(t.second.rootOffTeethShare, 0.05) << "root points off every CBCT tooth";
     size_t split = 0;
     for (const std::string& w : t.second.warnings)
@@ -579,7 +579,7 @@ TEST(VtkToothfuseFilter, FusesPerJawTeethMaskSplitByTheIos) {
     ASSERT_TRUE(ref.count(t.first));
     EXPECT_LT(t.second.treMm, ref.at(t.first) * 1.5) << "vs " << ref.at(t.first);
   }
-  EXPECT_LT(farShare, 0.05) << "mean share of root points off their own CBCT tooth";
+  EXPECT_LT(farShare, 0.01) << "mean share of root points off their own CBCT tooth";
 }
 
 // --- error paths -------------------------------------------------------------------------------
