@@ -450,12 +450,14 @@ struct ImageToothFacts {
 /// Demo jaw `d`'s IOS and the label image `cbct` fused through the filter in the CBCT frame with
 /// `scheme`: no error, the fused teeth those of `d.both` not reported skipped (with a reason),
 /// the whole jaw and each tooth closed and manifold (check_teeth); returns the facts per tooth.
-std::map<int, ImageToothFacts> fuse_image(Demo& d, int k, vtkImageData* cbct, int scheme) {
+std::map<int, ImageToothFacts> fuse_image(Demo& d, int k, vtkImageData* cbct, int scheme,
+                                          bool flipLpsRas = false) {
   vtkNew<vtkToothfuseFilter> f;
   ErrorSink errors(f);
   f->SetIOSInputData(d.iosPd);
   f->SetCBCTInputData(cbct);
   f->SetVolumeScheme(scheme);
+  f->SetFlipImageLPSRAS(flipLpsRas);
   f->Update();
   EXPECT_TRUE(errors.messages.empty()) << errors.messages.front();
   EXPECT_EQ(f->GetLastStatus(), static_cast<int>(TOOTHFUSE_STATUS_OK));
@@ -548,6 +550,31 @@ TEST(VtkToothfuseFilter, FusesPerToothLabelImageOnObliqueGrid) {
       EXPECT_EQ(w.find("split"), std::string::npos) << w;
     ASSERT_TRUE(ref.count(t.first));
     EXPECT_LT(t.second.treMm, ref.at(t.first) * 1.1 + 0.05) << "vs " << ref.at(t.first);
+  }
+}
+
+// The same per-tooth label image with its world in the other of LPS and RAS (origin and
+// direction negated in x and y, as a reader of the other convention gives it): with
+// FlipImageLPSRAS the filter brings it back to the meshes' frame and fuses it as well.
+TEST(VtkToothfuseFilter, FusesLabelImageInTheOtherOfLpsAndRas) {
+  Demo& d = demo(2);
+  ASSERT_TRUE(d.ok);
+  vtkNew<vtkShortArray> labels;
+  vtkSmartPointer<vtkImageData> image = label_image(d, labels, 0.3);
+  double origin[3];
+  image->GetOrigin(origin);
+  image->SetOrigin(-origin[0], -origin[1], origin[2]);
+  vtkNew<vtkMatrix3x3> dir;
+  dir->DeepCopy(image->GetDirectionMatrix());
+  for (int r = 0; r < 2; r++)
+    for (int c = 0; c < 3; c++) dir->SetElement(r, c, -dir->GetElement(r, c));
+  image->SetDirectionMatrix(dir);
+  const auto facts = fuse_image(d, 2, image, vtkToothfuseFilter::VOLUME_SCHEME_FDI, true);
+  EXPECT_EQ(d.expected, d.both) << "every tooth of the image fused";
+  for (const auto& t : facts) {
+    SCOPED_TRACE("tooth " + std::to_string(t.first));
+    EXPECT_LT(t.second.rootMeanMm, 0.1);
+    EXPECT_LT(t.second.rootFarShare, 0.01);
   }
 }
 
