@@ -120,8 +120,8 @@ pub(crate) fn step_costs(mask: &JawMask, up: DVec3, lateral_weight: f64) -> [f32
 
 /// How a tooth's flood grows: the cost of a step to each face neighbour (see [`step_costs`]),
 /// scaled at the voxel stepped to by `1 + axis_weight·(d / radius)²`, `d` the voxel's distance
-/// from the tooth's long-axis line and `radius` the tooth's RMS distance from it (both from a
-/// first flood without the prior): a root lies along its tooth's axis, so a path that runs
+/// from the tooth's long-axis line and `radius` the tooth's RMS distance from it (both from the
+/// previous flood's tooth): a root lies along its tooth's axis, so a path that runs
 /// along a neighbour's root, far from its own axis, costs more than the neighbour's own path
 /// there.
 #[derive(Clone, Copy, Debug)]
@@ -365,7 +365,7 @@ pub(crate) fn tally(
         };
         let close = plain.second_cost[id] - plain.best_cost[id] <= margin_mm;
         let ranked = plain.best[id] == a || plain.second[id] == a;
-        if rival == 0 || plain.second[id] == 0 || !close || !ranked {
+        if plain.second[id] == 0 || !close || !ranked {
             continue;
         }
         t.contested_voxels += 1;

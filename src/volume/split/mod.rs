@@ -3,9 +3,9 @@
 //! crowns: the crowns are registered as one rigid arch to the jaw's mask surface
 //! ([`ArchFit`]), refused when the fit is not trustworthy; the mask is then split by a
 //! nearest-crown flood inside the mask, seeded by the registered crowns and steered by each
-//! tooth's long axis (see `flood`); each
-//! tooth carries a split confidence (the share of its voxels whose assignment is contested) and
-//! teeth whose split cannot be trusted are refused with the reason. The result is a per-tooth
+//! tooth's long axis (see `flood`); each tooth carries a split confidence (the share of its
+//! voxels whose assignment is contested) and teeth whose split cannot be trusted are refused
+//! with the reason. The result is a per-tooth
 //! FDI label volume for [`crate::volume::surface_teeth`]; the registration here serves only
 //! the split (the per-tooth registration then runs as usual on the surfaced teeth).
 
@@ -43,8 +43,8 @@ pub struct SplitOptions {
     /// growing the teeth from their crowns.
     pub lateral_weight: f64,
     /// Weight of the long-axis prior: a step costs `1 + axis_weight·(d / r)²` times more at
-    /// distance `d` from the tooth's long-axis line through its crown (`r`: the crown's RMS
-    /// distance from that line); 0 turns it off.
+    /// distance `d` from the tooth's long-axis line (fitted to the voxels the previous flood gave
+    /// the tooth; `r`: their RMS distance from it); 0 turns it off.
     pub axis_weight: f64,
     /// A voxel is contested when its runner-up's path is at most this much (mm) longer.
     pub contested_margin_mm: f64,
@@ -117,8 +117,8 @@ impl SplitVolume {
     }
 
     /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested,
-    /// outside-footprint, interface (boundary drawn by the split) and moved (by the long-axis prior)
-    /// shares and, when refused, the reason (`null` otherwise).
+    /// outside-footprint, interface (boundary drawn by the split) and moved (by the long-axis
+    /// prior) shares and, when refused, the reason (`null` otherwise).
     pub fn to_json(&self) -> String {
         let jaws: Vec<serde_json::Value> = self
             .jaws
