@@ -67,15 +67,28 @@ fn fuse_and_measure(p: &Phantom, cbct: BTreeMap<u8, TriMesh>, what: &str) -> (f6
 
 /// Per tooth, the Dice overlap of the split's voxels with the mask's true tooth voxels.
 fn dice(split: &LabelVolume, truth: &LabelVolume) -> BTreeMap<u16, f64> {
+    overlap(split, truth)
+        .into_iter()
+        .map(|(l, (both, n_split, n_truth))| (l, 2.0 * both as f64 / (n_split + n_truth) as f64))
+        .collect()
+}
+
+/// Per split tooth, the share of its voxels that belong to another true tooth (or to none).
+fn wrong_share(split: &LabelVolume, truth: &LabelVolume) -> BTreeMap<u16, f64> {
+    overlap(split, truth)
+        .into_iter()
+        .filter(|(_, (_, n_split, _))| *n_split > 0)
+        .map(|(l, (both, n_split, _))| (l, 1.0 - both as f64 / n_split as f64))
+        .collect()
+}
+
+/// Per true tooth: voxels in both the split tooth and the true tooth, in the split tooth, in
+/// the true tooth.
+fn overlap(split: &LabelVolume, truth: &LabelVolume) -> BTreeMap<u16, (usize, usize, usize)> {
     let inv = truth.voxel_to_world.inverse();
     let mut both: BTreeMap<u16, usize> = BTreeMap::new();
-    let mut sizes: BTreeMap<u16, usize> = BTreeMap::new();
-    for (l, c) in truth.label_counts() {
-        *sizes.entry(l).or_default() += c;
-    }
-    for (l, c) in split.label_counts() {
-        *sizes.entry(l).or_default() += c;
-    }
+    let t_counts = truth.label_counts();
+    let s_counts = split.label_counts();
     let [nx, ny, _] = split.dims;
     for (id, &l) in split.labels.iter().enumerate() {
         if l == 0 {
@@ -92,14 +105,11 @@ fn dice(split: &LabelVolume, truth: &LabelVolume) -> BTreeMap<u16, f64> {
             *both.entry(l).or_default() += 1;
         }
     }
-    truth
-        .label_counts()
-        .keys()
-        .map(|&l| {
-            (
-                l,
-                2.0 * *both.get(&l).unwrap_or(&0) as f64 / sizes[&l] as f64,
-            )
+    t_counts
+        .iter()
+        .map(|(&l, &n)| {
+            let b = both.get(&l).copied().unwrap_or(0);
+            (l, (b, s_counts.get(&l).copied().unwrap_or(0), n))
         })
         .collect()
 }
@@ -198,7 +208,8 @@ fn a_half_millimetre_mask_is_split_as_well() {
     let d = dice(&split.volume, &coarse);
     eprintln!("0.5 mm Dice per tooth: {d:?}");
     assert_eq!(d.len(), 10);
-    assert!(d.values().all(|&v| v > 0.95), "{d:?}");
+    // Measured: Dice 0.993-1.000.
+    assert!(d.values().all(|&v| v > 0.985), "{d:?}");
 }
 
 #[test]
@@ -215,12 +226,36 @@ fn touching_teeth_are_split_at_their_contacts() {
     }
     let d = dice(&split.volume, &grown);
     eprintln!("Dice per tooth: {d:?}");
+    let wrong = wrong_share(&split.volume, &grown);
+    for (fdi, t) in &split.jaws[0].teeth {
+        eprintln!(
+            "tooth {fdi}: {:.1}% of another tooth; reported {:.1}% contested, {:.1}% of its \
+             boundary drawn by the split",
+            100.0 * wrong[&(*fdi as u16)],
+            100.0 * t.contested_share(),
+            100.0 * t.interface_share()
+        );
+    }
     assert!(split.refused().is_empty(), "{:?}", split.refused());
     assert_eq!(d.len(), 10);
-    // Measured: Dice 0.907-1.000, mean 0.958 (the roots of crowded incisors, canines and
-    // premolars are where the split errs).
+    // Measured: Dice 0.942-1.000, mean 0.981 (without the long-axis prior 0.907-1.000, mean
+    // 0.958); the canine 43 and premolar 44 are where it errs.
     let mean = d.values().sum::<f64>() / d.len() as f64;
-    assert!(d.values().all(|&v| v > 0.89) && mean > 0.945, "{d:?}");
+    assert!(d.values().all(|&v| v > 0.93) && mean > 0.975, "{d:?}");
+    // A tooth holding over 5 % of another tooth's voxels should be reported as contested.
+    // Measured: the others hold at most 2.3 %; tooth 44 holds 10.7 % (of 43's root) with
+    // 0.5 % contested: the split's confidence does not see it (a known limit).
+    let unreported: Vec<u8> = split.jaws[0]
+        .teeth
+        .iter()
+        .filter(|(f, t)| wrong[&(**f as u16)] > 0.05 && t.contested_share() < 0.05)
+        .map(|(f, _)| *f)
+        .collect();
+    assert!(
+        unreported.is_empty() || unreported == [44],
+        "{unreported:?}"
+    );
+    assert!(wrong[&44] < 0.12, "{wrong:?}");
 }
 
 #[test]
@@ -282,8 +317,8 @@ fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
         eprintln!("tooth {l}: Dice {v:.3}");
     }
     assert_eq!(d.len(), 10);
-    // Measured: Dice 0.977-1.000.
-    assert!(d.values().all(|&v| v > 0.97), "{d:?}");
+    // Measured: Dice 0.996-1.000 (without the long-axis prior 0.977-1.000).
+    assert!(d.values().all(|&v| v > 0.99), "{d:?}");
     // Deterministic bit for bit.
     let again = split_teeth(&merged, &crowns, &SplitOptions::default()).unwrap();
     assert_eq!(again.volume, split.volume);

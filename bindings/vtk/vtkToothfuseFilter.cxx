@@ -178,8 +178,9 @@ struct VolumeBuffers {
   std::vector<int32_t> copy;
 };
 
-/// Fills `out` from the label image `image`; on failure returns false with the reason in `err`.
-bool PrepareVolume(vtkImageData* image, VolumeBuffers& out, std::string& err) {
+/// Fills `out` from the label image `image` (world x and y negated when `flipLpsRas`: LPS <->
+/// RAS); on failure returns false with the reason in `err`.
+bool PrepareVolume(vtkImageData* image, bool flipLpsRas, VolumeBuffers& out, std::string& err) {
   std::ostringstream msg;
   int dims[3];
   image->GetDimensions(dims);
@@ -264,6 +265,9 @@ bool PrepareVolume(vtkImageData* image, VolumeBuffers& out, std::string& err) {
     }
     out.voxelToWorld[4 * r + 3] = t;
   }
+  // LPS <-> RAS: world x and y negated (rows 0 and 1 of the voxel-to-world matrix).
+  if (flipLpsRas)
+    for (int e = 0; e < 8; e++) out.voxelToWorld[e] = -out.voxelToWorld[e];
   out.voxelToWorld[15] = 1.0;
   return true;
 }
@@ -317,7 +321,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   VolumeBuffers volume;
   std::string err;
   if (!PrepareJaw(iosIn, this->IOSLabelArrayName, "IOS", ios, err) ||
-      (cbctImage ? !PrepareVolume(cbctImage, volume, err)
+      (cbctImage ? !PrepareVolume(cbctImage, this->FlipImageLPSRAS, volume, err)
                  : !PrepareJaw(cbctIn, this->CBCTLabelArrayName, "CBCT", cbct, err))) {
     this->LastStatus = static_cast<int>(TOOTHFUSE_STATUS_INVALID_ARGUMENT);
     vtkErrorMacro(<< err);
@@ -469,6 +473,7 @@ void vtkToothfuseFilter::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "Frame: " << (this->Frame == FRAME_IOS ? "IOS" : "CBCT") << "\n";
   static const char* const schemes[] = {"FDI", "Universal", "ToothFairy2", "DentalSegmentator"};
   os << indent << "VolumeScheme: " << schemes[this->VolumeScheme] << "\n";
+  os << indent << "FlipImageLPSRAS: " << this->FlipImageLPSRAS << "\n";
   os << indent << "IOSRepair: " << this->IOSRepair << " (MaxHoleFraction "
      << this->MaxHoleFraction << ")\n";
   os << indent << "AcceptQuestionable: " << this->AcceptQuestionable << "\n";

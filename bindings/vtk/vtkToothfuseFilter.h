@@ -22,7 +22,8 @@
 //    numbered as VolumeScheme says (FDI by default, Universal, ToothFairy2, or DentalSegmentator's
 //    one teeth class per jaw, split into teeth by the IOS crowns). Its extent, spacing
 //    (millimetres), origin and direction matrix place the voxels in the world frame, which is
-//    the CBCT frame: the library has no LPS/RAS switch, the image's world frame is used as it is.
+//    the CBCT frame, used as it is; when the image's world is LPS and the meshes' RAS (or the
+//    reverse), FlipImageLPSRAS negates its x and y first, so that the CBCT frame is the meshes'.
 //    Each tooth label is surfaced by toothfuse (closed meshes at the mask's 0.5 level).
 //
 // Output port 0: the fused jaw, one closed, manifold mesh per fused tooth (IOS crown + band +
@@ -100,6 +101,13 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   void SetFrameToCBCT() { this->SetFrame(FRAME_CBCT); }
   void SetFrameToIOS() { this->SetFrame(FRAME_IOS); }
 
+  /// For an image CBCT input whose world coordinates are LPS while the meshes (IOS, the CBCT
+  /// frame the output overlays) are RAS, or the reverse: negate the image's world x and y (off
+  /// by default: the image's world frame is the CBCT frame as it is).
+  vtkSetMacro(FlipImageLPSRAS, bool);
+  vtkGetMacro(FlipImageLPSRAS, bool);
+  vtkBooleanMacro(FlipImageLPSRAS, bool);
+
   /// Repair IOS crowns on entry (real scans need it; off by default) and the largest hole, as
   /// a fraction (0..1) of the margin's perimeter, that repair fills.
   vtkSetMacro(IOSRepair, bool);
@@ -143,6 +151,7 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   int Preset = PRESET_DEFAULT;
   int Frame = FRAME_CBCT;
   int VolumeScheme = VOLUME_SCHEME_FDI;
+  bool FlipImageLPSRAS = false;
   bool IOSRepair = false;
   double MaxHoleFraction = 0.5;
   bool AcceptQuestionable = false;

@@ -52,6 +52,9 @@
 //! - **Real anatomy** (`real`): with [`PhantomOptions::anatomy`], real closed tooth meshes are
 //!   the truth (kept in the caller's frame); long axis by PCA oriented to the wider crown end,
 //!   margin from the cross-section profile; a sampled signed distance replaces the implicit.
+//! - **Voxelized** ([`voxelize`]): closed tooth meshes (e.g. [`Phantom::cbct`]) as a label
+//!   volume with known truth (per-tooth FDI labels, or one class for every tooth as
+//!   DentalSegmentator writes them), on an axis-aligned or oblique grid.
 //!
 //! # Measured (seeds 1–4, full arch, both jaws, release build)
 //! - IOS: 191k–201k vertices (380k–399k faces), crowns 4.6k–11.2k vertices each, mean crown
@@ -97,12 +100,14 @@ pub mod rng;
 mod rough;
 mod shape;
 mod surface_nets;
+mod voxelize;
 
 pub use cbct::CbctRealism;
 pub use grid::Grid;
 pub use ios::IosRealism;
 pub use rough::{IosExport, IosRoughness};
 pub use surface_nets::{extract_closed, largest_component, surface_nets};
+pub use voxelize::{VoxelizeOptions, voxelize};
 
 use crate::arch::Jaw;
 use crate::mesh::{LabeledMesh, TriMesh};

@@ -8,6 +8,7 @@ use super::grid::Grid;
 use super::layout::PlacedTooth;
 use super::rng::Rng;
 use super::shape::ToothShape;
+use super::voxelize::{column_crossings, inside_samples};
 use crate::arch::{Jaw, arch_order};
 use crate::mesh::TriMesh;
 use crate::{Error, Result, Rigid};
@@ -52,46 +53,14 @@ impl SampledSdf {
                 }
             }
         }
-        // Sign by ray parity along z through each (i, j) column (slightly offset so that rays
-        // miss edges and vertices).
-        let off = (
-            h * 1e-4 * std::f64::consts::SQRT_2,
-            h * 1e-4 * std::f64::consts::PI,
-        );
-        let mut hits: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
-        for t in &mesh.triangles {
-            let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
-            let tlo = a.min(b).min(c);
-            let thi = a.max(b).max(c);
-            let i0 = ((tlo.x - grid.origin.x - off.0) / h).ceil().max(0.0) as usize;
-            let i1 = (((thi.x - grid.origin.x - off.0) / h).floor().max(-1.0) + 1.0) as usize;
-            let j0 = ((tlo.y - grid.origin.y - off.1) / h).ceil().max(0.0) as usize;
-            let j1 = (((thi.y - grid.origin.y - off.1) / h).floor().max(-1.0) + 1.0) as usize;
-            for j in j0..j1.min(ny) {
-                for i in i0..i1.min(nx) {
-                    let x = grid.origin.x + i as f64 * h + off.0;
-                    let y = grid.origin.y + j as f64 * h + off.1;
-                    if let Some(z) = vertical_hit(x, y, a, b, c) {
-                        hits[i + nx * j].push(z);
-                    }
-                }
-            }
-        }
+        // Sign by ray parity along z through each (i, j) column.
+        let cols = column_crossings(&mesh.positions, &mesh.triangles, grid.origin, h, grid.dims);
         for j in 0..ny {
             for i in 0..nx {
-                let col = &mut hits[i + nx * j];
-                col.sort_by(|p, q| p.total_cmp(q));
-                let mut below = 0;
-                for k in 0..nz {
-                    let z = grid.origin.z + k as f64 * h;
-                    while below < col.len() && col[below] < z {
-                        below += 1;
-                    }
-                    if below % 2 == 1 {
-                        let id = grid.idx(i, j, k);
-                        grid.values[id] = -grid.values[id];
-                    }
-                }
+                inside_samples(&cols[i + nx * j], grid.origin.z, h, nz, |k| {
+                    let id = grid.idx(i, j, k);
+                    grid.values[id] = -grid.values[id];
+                });
             }
         }
         SampledSdf { grid, band }
@@ -130,20 +99,6 @@ impl SampledSdf {
         let x11 = l(v(i, j + 1, k + 1), v(i + 1, j + 1, k + 1), tx);
         l(l(x00, x10, ty), l(x01, x11, ty), tz)
     }
-}
-
-/// Height at which the vertical line through (x, y) crosses triangle abc, if it does.
-fn vertical_hit(x: f64, y: f64, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
-    let d = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-    if d.abs() < 1e-18 {
-        return None;
-    }
-    let u = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / d;
-    let v = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / d;
-    if u < 0.0 || v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    Some(a.z + u * (b.z - a.z) + v * (c.z - a.z))
 }
 
 /// Distance from `p` to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).

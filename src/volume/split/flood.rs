@@ -2,9 +2,11 @@
 //! voxels inside each crown), then every other mask voxel goes to the crown it is nearest to
 //! along paths inside the mask, with sideways steps (across the arch's occlusal-apical axis)
 //! costing `lateral_weight` times their length: a root hangs under its crown, and two teeth
-//! meet only where the mask joins them. The flood keeps, for every voxel, the best two crowns;
-//! a voxel whose runner-up is within `margin` mm of the winner is contested (the mask and the
-//! crowns do not tell which tooth it belongs to).
+//! meet only where the mask joins them. Later floods also make steps dearer far from the
+//! tooth's long-axis line ([`Growth`]), so that a tooth that reaches a neighbour through a
+//! contact does not run down the neighbour's root. The plain flood keeps, for every voxel, the
+//! best two crowns; a voxel whose two paths there are within `margin` mm of each other is
+//! contested (the mask and the crowns do not tell which tooth it belongs to).
 
 use super::arch_fit::Sample;
 use super::mask::{FACES, JawMask};
@@ -116,10 +118,83 @@ pub(crate) fn step_costs(mask: &JawMask, up: DVec3, lateral_weight: f64) -> [f32
     })
 }
 
-/// The in-mask shortest-path flood from `seeds` (face neighbours, step costs `costs[tooth]`,
-/// cheapest first); a voxel is settled twice at most, by two different teeth. Ties go to the smaller
-/// voxel index: the result is deterministic.
-pub(crate) fn flood(mask: &JawMask, costs: &[[f32; 6]], seeds: &[u8]) -> Flood {
+/// How a tooth's flood grows: the cost of a step to each face neighbour (see [`step_costs`]),
+/// scaled at the voxel stepped to by `1 + axis_weight·(d / radius)²`, `d` the voxel's distance
+/// from the tooth's long-axis line and `radius` the tooth's RMS distance from it (both from the
+/// previous flood's tooth): a root lies along its tooth's axis, so a path that runs
+/// along a neighbour's root, far from its own axis, costs more than the neighbour's own path
+/// there.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Growth {
+    /// Step costs to the six face neighbours (mm).
+    pub steps: [f32; 6],
+    /// A point on the long-axis line (world mm).
+    pub point: DVec3,
+    /// The line's unit direction (zero: no axis prior).
+    pub axis: DVec3,
+    /// Squared-distance scale: `axis_weight / radius²` (0: no axis prior).
+    pub scale: f64,
+}
+
+impl Growth {
+    /// Plain step costs, without an axis prior.
+    pub fn plain(steps: [f32; 6]) -> Growth {
+        Growth {
+            steps,
+            point: DVec3::ZERO,
+            axis: DVec3::ZERO,
+            scale: 0.0,
+        }
+    }
+
+    /// Step costs with the axis prior of a tooth whose voxels (world mm) are `pts`: the line
+    /// through their centroid along their principal axis, or along `axis` (the crown's long
+    /// axis) when the principal axis leans more than 45° from it; weighted by `axis_weight`
+    /// (0 disables the prior).
+    pub fn of_tooth(steps: [f32; 6], pts: &[DVec3], axis: DVec3, axis_weight: f64) -> Growth {
+        let Some((point, pca)) = crate::geom::principal_axis(pts) else {
+            return Growth::plain(steps);
+        };
+        let axis = axis.normalize_or_zero();
+        let along = if pca.dot(axis).abs() < std::f64::consts::FRAC_1_SQRT_2 {
+            axis
+        } else {
+            pca
+        };
+        let mut g = Growth {
+            steps,
+            point,
+            axis: along,
+            scale: 0.0,
+        };
+        let r2 = pts.iter().map(|p| g.dist2(*p)).sum::<f64>() / pts.len() as f64;
+        if r2 > 1e-6 && along != DVec3::ZERO {
+            g.scale = axis_weight / r2;
+        }
+        g
+    }
+
+    /// Squared distance of `p` from the axis line.
+    fn dist2(&self, p: DVec3) -> f64 {
+        let d = p - self.point;
+        let v = d.dot(self.axis);
+        (d.length_squared() - v * v).max(0.0)
+    }
+
+    /// The cost multiplier at world point `p`.
+    fn factor(&self, p: DVec3) -> f32 {
+        if self.scale == 0.0 {
+            1.0
+        } else {
+            (1.0 + self.scale * self.dist2(p)) as f32
+        }
+    }
+}
+
+/// The in-mask shortest-path flood from `seeds` (face neighbours, step costs `growth[tooth]`,
+/// cheapest first); a voxel is settled twice at most, by two different teeth. Ties go to the
+/// smaller voxel index: the result is deterministic.
+pub(crate) fn flood(mask: &JawMask, growth: &[Growth], seeds: &[u8]) -> Flood {
     let n = mask.inside.len();
     let mut f = Flood {
         best: vec![0; n],
@@ -145,10 +220,12 @@ pub(crate) fn flood(mask: &JawMask, costs: &[[f32; 6]], seeds: &[u8]) -> Flood {
         } else {
             continue;
         }
-        for (step, c) in FACES.iter().zip(&costs[lab as usize]) {
+        let g = &growth[lab as usize];
+        for (step, c) in FACES.iter().zip(&g.steps) {
             let u = mask.step(id, *step);
             let open = f.best[u] == 0 || (f.best[u] != lab && f.second[u] == 0);
             if mask.inside[u] && open {
+                let c = c * g.factor(mask.world(u));
                 heap.push(Reverse(((cost + c).to_bits(), u as u32, lab)));
             }
         }
@@ -165,11 +242,18 @@ pub struct ToothSplit {
     pub seed_voxels: usize,
     /// Of them, voxels whose assignment is contested (see the module doc).
     pub contested_voxels: usize,
+    /// Of them, voxels the long-axis prior moved to this tooth from the tooth the plain flood
+    /// gave them.
+    pub moved_voxels: usize,
     /// The tooth contesting most of them, if any.
     pub contested_with: Option<u8>,
     /// Of them, voxels not under its crown (farther across the occlusal-apical axis than the
     /// footprint allowance from every crown vertex).
     pub outside_voxels: usize,
+    /// Faces of its voxels on its boundary: to a voxel outside the mask or of another tooth.
+    pub boundary_faces: usize,
+    /// Of them, faces to a voxel of another tooth: boundary the split drew, not the mask.
+    pub interface_faces: usize,
 }
 
 impl ToothSplit {
@@ -181,6 +265,18 @@ impl ToothSplit {
     /// Share of the tooth's voxels not under its crown.
     pub fn outside_share(&self) -> f64 {
         self.outside_voxels as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Share of the tooth's voxels the long-axis prior moved to it.
+    pub fn moved_share(&self) -> f64 {
+        self.moved_voxels as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Share of the tooth's boundary drawn by the split (faces to another tooth's voxels)
+    /// rather than by the mask: where the teeth touch, the split's boundary is a guess the mask
+    /// cannot confirm, however uncontested the flood was.
+    pub fn interface_share(&self) -> f64 {
+        self.interface_faces as f64 / self.boundary_faces.max(1) as f64
     }
 }
 
@@ -225,10 +321,14 @@ pub(crate) fn outside_footprint(
     .concat()
 }
 
-/// Per tooth, its voxel counts; and the number of mask voxels no seed reached.
+/// Per tooth, its voxel counts; and the number of mask voxels no seed reached. `best` is the
+/// final assignment, `plain` the flood without the long-axis prior (whose path costs are mm): a
+/// voxel is contested when that flood ranks its tooth first or second and the two paths are
+/// within `margin_mm` of each other; it is moved when that flood gave it another tooth.
 pub(crate) fn tally(
     mask: &JawMask,
-    f: &Flood,
+    best: &[u8],
+    plain: &Flood,
     seeds: &[u8],
     outside: &[bool],
     margin_mm: f32,
@@ -236,7 +336,7 @@ pub(crate) fn tally(
     let mut teeth: BTreeMap<u8, ToothSplit> = BTreeMap::new();
     let mut rivals: BTreeMap<(u8, u8), usize> = BTreeMap::new();
     let mut unreached = 0;
-    for (id, (&inside, &a)) in mask.inside.iter().zip(&f.best).enumerate() {
+    for (id, (&inside, &a)) in mask.inside.iter().zip(best).enumerate() {
         if !inside {
             continue;
         }
@@ -247,15 +347,29 @@ pub(crate) fn tally(
         let t = teeth.entry(a).or_default();
         t.voxels += 1;
         t.outside_voxels += outside[id] as usize;
+        for step in FACES {
+            let u = mask.step(id, step);
+            let other = mask.inside[u] && best[u] != a && best[u] != 0;
+            t.boundary_faces += (!mask.inside[u] || other) as usize;
+            t.interface_faces += other as usize;
+        }
         if seeds[id] == a {
             t.seed_voxels += 1;
             continue;
         }
-        let b = f.second[id];
-        if b != 0 && f.second_cost[id] - f.best_cost[id] <= margin_mm {
-            t.contested_voxels += 1;
-            *rivals.entry((a, b)).or_default() += 1;
+        t.moved_voxels += (plain.best[id] != a) as usize;
+        let rival = if plain.best[id] == a {
+            plain.second[id]
+        } else {
+            plain.best[id]
+        };
+        let close = plain.second_cost[id] - plain.best_cost[id] <= margin_mm;
+        let ranked = plain.best[id] == a || plain.second[id] == a;
+        if plain.second[id] == 0 || !close || !ranked {
+            continue;
         }
+        t.contested_voxels += 1;
+        *rivals.entry((a, rival)).or_default() += 1;
     }
     for (fdi, t) in teeth.iter_mut() {
         t.contested_with = rivals
@@ -305,21 +419,21 @@ mod tests {
         let c1 = step_costs(&m, DVec3::Z, 3.0);
         assert_eq!(c1[4], 0.25);
         assert!((c1[0] - 0.75).abs() < 1e-6);
-        let c = vec![c1; 256];
+        let c = vec![Growth::plain(c1); 256];
         let f = flood(&m, &c, &s);
         assert_eq!(f.best[m.idx(2, 6, 1)], 41);
         assert_eq!(f.best[m.idx(22, 6, 1)], 42);
         // The bridge voxel on 41's side is 41's.
         assert_eq!(f.best[m.idx(11, 5, 5)], 41);
         let none = vec![false; m.inside.len()];
-        let (teeth, unreached) = tally(&m, &f, &s, &none, 1.0);
+        let (teeth, unreached) = tally(&m, &f.best, &f, &s, &none, 1.0);
         assert_eq!(unreached, 0);
         assert_eq!(teeth[&41].voxels + teeth[&42].voxels, m.count());
         assert!(teeth[&41].contested_share() < 0.02, "{:?}", teeth[&41]);
         // One solid block seeded at both ends of its top: the middle is contested.
         let (m, s) = two_boxes(10);
         let f = flood(&m, &c, &s);
-        let (teeth, _) = tally(&m, &f, &s, &none, 1.0);
+        let (teeth, _) = tally(&m, &f.best, &f, &s, &none, 1.0);
         let share = teeth[&41].contested_share();
         assert!(share > 0.03 && share < 0.3, "{:?}", teeth[&41]);
         assert_eq!(teeth[&41].contested_with, Some(42));

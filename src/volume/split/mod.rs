@@ -2,9 +2,10 @@
 //! give one teeth label per jaw (3 upper, 4 lower) and no tooth numbers. For each jaw with IOS
 //! crowns: the crowns are registered as one rigid arch to the jaw's mask surface
 //! ([`ArchFit`]), refused when the fit is not trustworthy; the mask is then split by a
-//! nearest-crown flood inside the mask, seeded by the registered crowns (see `flood`); each
-//! tooth carries a split confidence (the share of its voxels whose assignment is contested) and
-//! teeth whose split cannot be trusted are refused with the reason. The result is a per-tooth
+//! nearest-crown flood inside the mask, seeded by the registered crowns and steered by each
+//! tooth's long axis (see `flood`); each tooth carries a split confidence (the share of its
+//! voxels whose assignment is contested) and teeth whose split cannot be trusted are refused
+//! with the reason. The result is a per-tooth
 //! FDI label volume for [`crate::volume::surface_teeth`]; the registration here serves only
 //! the split (the per-tooth registration then runs as usual on the surfaced teeth).
 
@@ -41,6 +42,10 @@ pub struct SplitOptions {
     /// Cost of a sideways step (across the occlusal-apical axis) over an axial one, when
     /// growing the teeth from their crowns.
     pub lateral_weight: f64,
+    /// Weight of the long-axis prior: a step costs `1 + axis_weight·(d / r)²` times more at
+    /// distance `d` from the tooth's long-axis line (fitted to the voxels the previous flood gave
+    /// the tooth; `r`: their RMS distance from it); 0 turns it off.
+    pub axis_weight: f64,
     /// A voxel is contested when its runner-up's path is at most this much (mm) longer.
     pub contested_margin_mm: f64,
     /// A tooth is refused above this share of contested voxels.
@@ -62,6 +67,7 @@ impl Default for SplitOptions {
             min_crown_inlier_share: 0.5,
             seed_depth_mm: 3.0,
             lateral_weight: 3.0,
+            axis_weight: 3.0,
             contested_margin_mm: 1.0,
             max_contested_share: 0.25,
             footprint_mm: 3.5,
@@ -110,8 +116,9 @@ impl SplitVolume {
         v
     }
 
-    /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested and
-    /// outside-footprint shares and, when refused, the reason (`null` otherwise).
+    /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested,
+    /// outside-footprint, interface (boundary drawn by the split) and moved (by the long-axis
+    /// prior) shares and, when refused, the reason (`null` otherwise).
     pub fn to_json(&self) -> String {
         let jaws: Vec<serde_json::Value> = self
             .jaws
@@ -126,6 +133,8 @@ impl SplitVolume {
                             "voxels": t.voxels,
                             "contested_share": t.contested_share(),
                             "outside_share": t.outside_share(),
+                            "interface_share": t.interface_share(),
+                            "moved_share": t.moved_share(),
                             "refused": j.refused.get(fdi),
                         })
                     })
@@ -154,10 +163,12 @@ impl SplitVolume {
                     Some(r) => format!("tooth {fdi}: refused: {r}"),
                     None => format!(
                         "tooth {fdi}: split from the per-jaw mask, {} voxels, {:.1}% contested, \
-                         {:.1}% outside its crown's footprint",
+                         {:.1}% outside its crown's footprint, {:.1}% of its boundary drawn by \
+                         the split",
                         t.voxels,
                         100.0 * t.contested_share(),
-                        100.0 * t.outside_share()
+                        100.0 * t.outside_share(),
+                        100.0 * t.interface_share()
                     ),
                 });
             }
@@ -287,18 +298,13 @@ fn split_jaw(
         })
         .collect();
     let seeds = flood::seeds(&mask, &placed, opts.seed_depth_mm);
-    let mut costs = vec![flood::step_costs(&mask, fit.up, opts.lateral_weight); 256];
-    for (f, m) in &placed {
-        let axis = flood::crown_axis(m, fit.up);
-        costs[*f as usize] = flood::step_costs(&mask, axis, opts.lateral_weight);
-    }
-    let f = flood::flood(&mask, &costs, &seeds);
-    let outside = flood::outside_footprint(&mask, &f.best, &placed, fit.up, opts.footprint_mm);
+    let (plain, best) = grow(&mask, &placed, &seeds, fit.up, opts);
+    let outside = flood::outside_footprint(&mask, &best, &placed, fit.up, opts.footprint_mm);
     let margin = opts.contested_margin_mm as f32;
-    let (mut teeth, unreached_voxels) = flood::tally(&mask, &f, &seeds, &outside, margin);
+    let (mut teeth, unreached_voxels) =
+        flood::tally(&mask, &best, &plain, &seeds, &outside, margin);
     let refused = refuse(&fit, crowns, &mut teeth, opts);
-    let labels = f
-        .best
+    let labels = best
         .iter()
         .zip(&mask.inside)
         .map(|(&b, &inside)| {
@@ -318,6 +324,56 @@ fn split_jaw(
         unreached_voxels,
     };
     Ok((split, mask, labels))
+}
+
+/// Floods steered by the teeth's axis lines, each line fitted to the previous flood's teeth
+/// (measured on the STS lower teeth grown to touch: the worst tooth's share of another tooth's
+/// voxels 14.3 % after one, 10.7 % after three).
+const AXIS_ROUNDS: usize = 3;
+
+/// The flood of the mask from the crowns' seeds: first with step costs alone (sideways steps
+/// about each crown's long axis costing more), then, while the long-axis prior is on, again
+/// with each tooth's axis line fitted to the voxels the previous flood gave it. Returns the
+/// plain flood and the final tooth per voxel.
+fn grow(
+    mask: &JawMask,
+    placed: &BTreeMap<u8, TriMesh>,
+    seeds: &[u8],
+    up: glam::DVec3,
+    opts: &SplitOptions,
+) -> (flood::Flood, Vec<u8>) {
+    let plain = flood::Growth::plain(flood::step_costs(mask, up, opts.lateral_weight));
+    let mut growth = vec![plain; 256];
+    let mut axes = BTreeMap::new();
+    for (f, m) in placed {
+        let axis = flood::crown_axis(m, up);
+        growth[*f as usize] =
+            flood::Growth::plain(flood::step_costs(mask, axis, opts.lateral_weight));
+        axes.insert(*f, axis);
+    }
+    let first = flood::flood(mask, &growth, seeds);
+    let mut best = first.best.clone();
+    let rounds = if opts.axis_weight > 0.0 {
+        AXIS_ROUNDS
+    } else {
+        0
+    };
+    for _ in 0..rounds {
+        let mut pts: BTreeMap<u8, Vec<glam::DVec3>> = BTreeMap::new();
+        for (id, &b) in best.iter().enumerate() {
+            if b != 0 && mask.inside[id] {
+                pts.entry(b).or_default().push(mask.world(id));
+            }
+        }
+        for (t, axis) in &axes {
+            if let Some(p) = pts.get(t) {
+                let steps = growth[*t as usize].steps;
+                growth[*t as usize] = flood::Growth::of_tooth(steps, p, *axis, opts.axis_weight);
+            }
+        }
+        best = flood::flood(mask, &growth, seeds).best;
+    }
+    (first, best)
 }
 
 /// Refuses an arch fit whose evidence is weak, naming the measure and the likely cause.
