@@ -1,7 +1,8 @@
 //! The `toothfuse` binary with CBCT label volumes: `info` on a NIfTI built here (and its error on
 //! a volume without orientation), and `fuse --cbct mask.nii.gz` on a real-anatomy phantom made from
 //! the STS 2024 mask (../shared/data/real; skipped with a message when absent), checked against
-//! the truth through report.json.
+//! the truth through report.json; and `demo --cbct-volume` whose label volumes fuse as well as
+//! its CBCT meshes.
 
 mod real_data;
 
@@ -162,25 +163,8 @@ fn fused_mean_tre(out: &std::path::Path, p: &Phantom) -> (f64, usize) {
     (mean, tre.len())
 }
 
-/// A raw little-endian uint16 NRRD of `v` (LPS world).
 fn write_nrrd(path: &std::path::Path, v: &toothfuse::volume::LabelVolume) {
-    let m = v.voxel_to_world;
-    let dir = |c: glam::DVec4| format!("({},{},{})", c.x, c.y, c.z);
-    let mut out = format!(
-        "NRRD0004\ntype: uint16\ndimension: 3\nspace: left-posterior-superior\nsizes: {} {} {}\n\
-         space directions: {} {} {}\nkinds: domain domain domain\nencoding: raw\nendian: little\n\
-         space origin: {}\n\n",
-        v.dims[0],
-        v.dims[1],
-        v.dims[2],
-        dir(m.x_axis),
-        dir(m.y_axis),
-        dir(m.z_axis),
-        dir(m.w_axis)
-    )
-    .into_bytes();
-    out.extend(v.labels.iter().flat_map(|l| l.to_le_bytes()));
-    std::fs::write(path, out).unwrap();
+    toothfuse::io::write_nrrd(path, v).unwrap();
 }
 
 #[test]
@@ -259,4 +243,110 @@ fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(err.contains("other jaw"), "{err}");
+}
+
+/// Per fused tooth of `out/report.json` (output frame: the phantom's CBCT frame, where the demo
+/// writes its CBCT), the TRE of its registration against the phantom's truth.
+fn tre_by_tooth(out: &std::path::Path, p: &Phantom) -> std::collections::BTreeMap<u8, f64> {
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    rep["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            assert!(t["watertight"].as_bool().unwrap(), "{t}");
+            let fdi = t["fdi"].as_u64().unwrap() as u8;
+            let m: Vec<f64> = t["ios_to_output"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let cbct_to_ios = Rigid::from_row_major(&m.try_into().unwrap()).inverse();
+            let tre = p.truth.teeth[&fdi].tre(&p.truth.world_to_cbct, &cbct_to_ios);
+            (fdi, tre)
+        })
+        .collect()
+}
+
+/// `toothfuse demo --cbct-volume 0.3` writes the CBCT teeth as a per-tooth FDI label volume and
+/// as DentalSegmentator's one upper-teeth class; fusing the IOS with either (the second split by
+/// the IOS crowns) gives every tooth of the mesh path, watertight, with its TRE.
+#[test]
+fn demo_label_volumes_fuse_like_the_meshes() {
+    let d = tmp("demo");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let o = tf(&[
+        "demo",
+        "--seed",
+        "3",
+        "--jaw",
+        "upper",
+        "--variant",
+        "partial",
+        "--cbct-volume",
+        "0.3",
+        "--out",
+        &s(&d),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info = tf(&["info", &s(&d.join("cbct_teeth_class.nrrd"))]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success() && text.contains("LPS"), "{text}");
+    let fuse = |cbct: &str, extra: &[&str], name: &str| {
+        let out = d.join(name);
+        let mut a: Vec<String> = ["fuse", "--ios"].map(String::from).to_vec();
+        a.extend([s(&d.join("ios.ply")), "--cbct".into(), s(&d.join(cbct))]);
+        a.extend(["--out".into(), s(&out)]);
+        a.extend(extra.iter().map(|x| x.to_string()));
+        let o = tf(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        out
+    };
+    let p = Phantom::generate(&toothfuse::phantom::PhantomOptions {
+        seed: 3,
+        jaw: Jaw::Upper,
+        variant: toothfuse::phantom::Variant::PartialArch,
+        ..Default::default()
+    })
+    .unwrap();
+    let meshes = tre_by_tooth(&fuse("cbct.ply", &[], "meshes"), &p);
+    let labels = tre_by_tooth(&fuse("cbct_labels.nrrd", &[], "labels"), &p);
+    let split = tre_by_tooth(
+        &fuse(
+            "cbct_teeth_class.nrrd",
+            &["--cbct-classes", "dentalsegmentator"],
+            "split",
+        ),
+        &p,
+    );
+    let mean = |m: &std::collections::BTreeMap<u8, f64>| m.values().sum::<f64>() / m.len() as f64;
+    eprintln!(
+        "demo jaw: mean TRE meshes {:.3} mm, per-tooth volume {:.3} mm, per-jaw class split {:.3} mm",
+        mean(&meshes),
+        mean(&labels),
+        mean(&split)
+    );
+    assert_eq!(meshes.len(), 5, "{meshes:?}");
+    assert_eq!(
+        labels.keys().collect::<Vec<_>>(),
+        meshes.keys().collect::<Vec<_>>()
+    );
+    assert_eq!(
+        split.keys().collect::<Vec<_>>(),
+        meshes.keys().collect::<Vec<_>>()
+    );
+    assert!(
+        mean(&labels) <= 1.1 * mean(&meshes) + 0.02,
+        "{labels:?} vs {meshes:?}"
+    );
+    assert!(
+        mean(&split) <= 1.5 * mean(&labels),
+        "{split:?} vs {labels:?}"
+    );
 }

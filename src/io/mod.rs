@@ -27,7 +27,9 @@ pub use teeth::{
     LabelScheme, Teeth, TeethOptions, fdi_to_universal, read_teeth, read_teeth_opts,
     read_teeth_with, universal_to_fdi, write_teeth_dir,
 };
-pub use volume::{VolumeFile, VolumeHeader, is_volume_path, read_label_volume};
+pub use volume::{
+    VolumeFile, VolumeHeader, is_volume_path, nrrd_bytes, read_label_volume, write_nrrd,
+};
 pub use vtk_legacy::{read_vtk_legacy_bytes, read_vtk_legacy_bytes_with};
 pub use vtp::{VtpEncoding, read_vtp_bytes, read_vtp_bytes_with, write_vtp};
 

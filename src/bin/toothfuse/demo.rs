@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
-use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant, VoxelizeOptions, voxelize};
 
 /// Options shared by every command that builds a synthetic jaw.
 #[derive(Args, Clone, Debug)]
@@ -67,6 +67,12 @@ pub struct DemoArgs {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
+    /// Also write the CBCT teeth as label volumes voxelized at this size (mm), the way CBCT
+    /// segmentation tools give them: `cbct_labels.nrrd` (one FDI label per tooth) and
+    /// `cbct_teeth_class.nrrd` (every tooth one class, 3 upper or 4 lower, as DentalSegmentator
+    /// writes them), LPS, on the CBCT frame's axes.
+    #[arg(long, value_name = "MM")]
+    cbct_volume: Option<f64>,
 }
 
 /// Merges per-tooth meshes into one mesh with a per-vertex FDI label.
@@ -84,6 +90,9 @@ pub fn merge_labeled(teeth: &BTreeMap<u8, TriMesh>) -> (TriMesh, Vec<i32>) {
 pub fn run(a: &DemoArgs) -> Result<()> {
     let ph = a.phantom.generate()?;
     write_phantom(&ph, &a.out)?;
+    if let Some(voxel_mm) = a.cbct_volume {
+        write_volumes(&ph, &a.out, voxel_mm)?;
+    }
     let ios_labels = ph.ios.vertex_labels.as_ref().map(|l| l.len()).unwrap_or(0);
     println!(
         "wrote {}: ios.ply ({} vertices, {} labels), cbct.ply ({} teeth), truth/",
@@ -92,6 +101,28 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         ios_labels,
         ph.cbct.len()
     );
+    Ok(())
+}
+
+/// Writes the CBCT teeth voxelized at `voxel_mm` into `dir` as a per-tooth FDI label volume
+/// (`cbct_labels.nrrd`) and as one teeth class of the jaw (`cbct_teeth_class.nrrd`).
+fn write_volumes(ph: &Phantom, dir: &Path, voxel_mm: f64) -> Result<()> {
+    let class = match ph.jaw {
+        Jaw::Upper => 3,
+        Jaw::Lower => 4,
+    };
+    for (name, class) in [
+        ("cbct_labels.nrrd", None),
+        ("cbct_teeth_class.nrrd", Some(class)),
+    ] {
+        let opts = VoxelizeOptions {
+            voxel_mm,
+            class,
+            ..VoxelizeOptions::default()
+        };
+        let v = voxelize(&ph.cbct, &opts).with_context(|| format!("voxelizing {name}"))?;
+        toothfuse::io::write_nrrd(dir.join(name), &v)?;
+    }
     Ok(())
 }
 

@@ -11,9 +11,11 @@
 
 mod nifti;
 mod nrrd;
+mod nrrd_write;
 
 pub use nifti::read_nifti_from;
 pub use nrrd::read_nrrd_from;
+pub use nrrd_write::{nrrd_bytes, write_nrrd};
 
 use crate::volume::{Frame, LabelVolume};
 use crate::{Error, Result};
