@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace {
 
@@ -189,6 +190,29 @@ std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f,
   return "";
 }
 
+// Loads the demo jaw in `jd` into `s` and fuses it in one call; `fdis` receives the fused teeth
+// and `skipped` each tooth not fused with the reason.
+void fuse_demo_jaw(tf::Session& s, const std::string& jd, std::vector<int32_t>& fdis,
+                   std::vector<std::pair<int32_t, std::string>>& skipped) {
+  ASSERT_TRUE(tf::load_demo(s, jd, false)) << jd;
+  ASSERT_EQ(toothfuse_session_fuse(s.get(), nullptr), TOOTHFUSE_STATUS_OK)
+      << jd << ": " << s.error();
+  fdis.assign(52, 0);
+  size_t n = 0;
+  ASSERT_EQ(toothfuse_session_fused_teeth(s.get(), fdis.data(), fdis.size(), &n),
+            TOOTHFUSE_STATUS_OK);
+  fdis.resize(n);
+  size_t nskip = 0;
+  ASSERT_EQ(toothfuse_session_skipped_count(s.get(), &nskip), TOOTHFUSE_STATUS_OK);
+  skipped.clear();
+  for (size_t i = 0; i < nskip; i++) {
+    int32_t f = 0;
+    const char* why = nullptr;
+    ASSERT_EQ(toothfuse_session_skipped(s.get(), i, &f, &why), TOOTHFUSE_STATUS_OK);
+    skipped.emplace_back(f, why);
+  }
+}
+
 TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
   const char* dir = std::getenv("TOOTHFUSE_JAWS_DIR");
   ASSERT_NE(dir, nullptr) << "TOOTHFUSE_JAWS_DIR unset (the demo_jaws fixture sets it)";
@@ -197,29 +221,22 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
     std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
     if (!std::ifstream(jd + "/ios.ply").good()) break;
     tf::Session s;
-    ASSERT_TRUE(tf::load_demo(s, jd, false)) << jd;
-    ASSERT_EQ(toothfuse_session_fuse(s.get(), nullptr), TOOTHFUSE_STATUS_OK)
-        << jd << ": " << s.error();
+    std::vector<int32_t> fdis;
+    std::vector<std::pair<int32_t, std::string>> notFused;
+    fuse_demo_jaw(s, jd, fdis, notFused);
+    if (HasFatalFailure()) return;
     jaws++;
-    int32_t fdis[52];
-    size_t n = 0;
-    ASSERT_EQ(toothfuse_session_fused_teeth(s.get(), fdis, 52, &n), TOOTHFUSE_STATUS_OK);
-    size_t nskip = 0;
-    ASSERT_EQ(toothfuse_session_skipped_count(s.get(), &nskip), TOOTHFUSE_STATUS_OK);
-    for (size_t i = 0; i < nskip; i++) {
-      int32_t f = 0;
-      const char* why = nullptr;
-      ASSERT_EQ(toothfuse_session_skipped(s.get(), i, &f, &why), TOOTHFUSE_STATUS_OK);
-      std::printf("%s: tooth %d skipped: %s\n", jd.c_str(), f, why);
-      if (std::string(why).find("fusion failed") == 0) {
+    for (const auto& [f, why] : notFused) {
+      std::printf("%s: tooth %d skipped: %s\n", jd.c_str(), f, why.c_str());
+      if (why.rfind("fusion failed", 0) == 0) {
         failed++;
         // A failed tooth is reported, not delivered; the others are.
-        EXPECT_EQ(std::count(fdis, fdis + n, f), 0) << jd << ": tooth " << f;
+        EXPECT_EQ(std::count(fdis.begin(), fdis.end(), f), 0) << jd << ": tooth " << f;
       } else {
         skipped++;
       }
     }
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < fdis.size(); i++) {
       Fused f = fused(s, fdis[i]);
       std::string err = vtk_check(f) + openmesh_check(f) + crown_check(s, fdis[i], f);
       EXPECT_TRUE(err.empty()) << jd << " tooth " << fdis[i] << ": " << err;
@@ -242,9 +259,10 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
 // Two rough IOS exports (rough_jaws fixture: a rough partial upper arch and a coarse lower arch
 // with missing teeth): every tooth in both modalities fuses, closed and manifold for VTK and
 // OpenMesh, with every IOS crown vertex kept but the ones reported trimmed (all within 0.3 mm of
-// the margin) or dropped (label-noise islands apart from the crown). Measured: the coarse crowns lose up to ~7 % of their vertices to the fringe trim (the
-// 0.5 % of the clean contract is not met there) and some teeth keep crossing pairs with a band
-// face (the library reports them; the Rust test fuse_rough bounds them at 30 per tooth).
+// the margin) or dropped (label-noise islands apart from the crown). Measured: the coarse crowns
+// lose up to ~7 % of their vertices to the fringe trim (the 0.5 % of the clean contract is not
+// met there) and some teeth keep crossing pairs with a band face (the library reports them; the
+// Rust test fuse_rough bounds them at 30 per tooth).
 TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
   const char* dir = std::getenv("TOOTHFUSE_ROUGH_JAWS_DIR");
   ASSERT_NE(dir, nullptr) << "TOOTHFUSE_ROUGH_JAWS_DIR unset (the rough_jaws fixture sets it)";
@@ -254,23 +272,14 @@ TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
     std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
     if (!std::ifstream(jd + "/ios.ply").good()) break;
     tf::Session s;
-    ASSERT_TRUE(tf::load_demo(s, jd, false)) << jd;
-    ASSERT_EQ(toothfuse_session_fuse(s.get(), nullptr), TOOTHFUSE_STATUS_OK)
-        << jd << ": " << s.error();
+    std::vector<int32_t> fdis;
+    std::vector<std::pair<int32_t, std::string>> notFused;
+    fuse_demo_jaw(s, jd, fdis, notFused);
+    if (HasFatalFailure()) return;
     jaws++;
-    int32_t fdis[52];
-    size_t n = 0;
-    ASSERT_EQ(toothfuse_session_fused_teeth(s.get(), fdis, 52, &n), TOOTHFUSE_STATUS_OK);
-    size_t nskip = 0;
-    ASSERT_EQ(toothfuse_session_skipped_count(s.get(), &nskip), TOOTHFUSE_STATUS_OK);
-    for (size_t i = 0; i < nskip; i++) {
-      int32_t f = 0;
-      const char* why = nullptr;
-      ASSERT_EQ(toothfuse_session_skipped(s.get(), i, &f, &why), TOOTHFUSE_STATUS_OK);
-      EXPECT_NE(std::string(why).rfind("fusion failed", 0), 0u)
-          << jd << ": tooth " << f << " lost: " << why;
-    }
-    for (size_t i = 0; i < n; i++) {
+    for (const auto& [f, why] : notFused)
+      EXPECT_NE(why.rfind("fusion failed", 0), 0u) << jd << ": tooth " << f << " lost: " << why;
+    for (size_t i = 0; i < fdis.size(); i++) {
       Fused f = fused(s, fdis[i]);
       std::string err = vtk_check(f) + openmesh_check(f) + crown_check(s, fdis[i], f, rough);
       EXPECT_TRUE(err.empty()) << jd << " tooth " << fdis[i] << ": " << err;

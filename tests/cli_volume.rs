@@ -138,29 +138,42 @@ fn fuse_from_the_sts_mask_file() {
 /// CBCT frame of the file is the phantom's world and the truth's CBCT -> IOS mapping is from the
 /// phantom's own CBCT frame, so each estimate is expressed from there.
 fn fused_mean_tre(out: &std::path::Path, p: &Phantom) -> (f64, usize) {
-    let rep: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let fused = rep["teeth"].as_array().unwrap();
-    let fdis: Vec<u64> = fused.iter().map(|t| t["fdi"].as_u64().unwrap()).collect();
+    let w2c = p.truth.world_to_cbct;
+    let fused = fused_teeth(out);
+    let fdis: Vec<u8> = fused.keys().copied().collect();
     assert_eq!(fdis, vec![31, 32, 33, 35, 36, 37, 41, 42, 43, 44]);
-    let mut tre = Vec::new();
-    for t in fused {
-        assert!(t["watertight"].as_bool().unwrap(), "{t}");
-        let fdi = t["fdi"].as_u64().unwrap() as u8;
-        let m: Vec<f64> = t["ios_to_output"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        let ios_to_cbct = Rigid::from_row_major(&m.try_into().unwrap());
-        let w2c = p.truth.world_to_cbct;
-        let est = ios_to_cbct.inverse().compose(&w2c.inverse());
-        tre.push(p.truth.teeth[&fdi].tre(&w2c, &est));
-    }
+    let tre: Vec<f64> = fused
+        .iter()
+        .map(|(fdi, ios_to_cbct)| {
+            let est = ios_to_cbct.inverse().compose(&w2c.inverse());
+            p.truth.teeth[fdi].tre(&w2c, &est)
+        })
+        .collect();
     let mean = tre.iter().sum::<f64>() / tre.len() as f64;
     assert!(mean < 0.1, "mean TRE {mean} ({tre:?})");
     (mean, tre.len())
+}
+
+/// The teeth of `out/report.json`, each asserted watertight, with its IOS -> output transform.
+fn fused_teeth(out: &std::path::Path) -> std::collections::BTreeMap<u8, Rigid> {
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    rep["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            assert!(t["watertight"].as_bool().unwrap(), "{t}");
+            let m: Vec<f64> = t["ios_to_output"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let fdi = t["fdi"].as_u64().unwrap() as u8;
+            (fdi, Rigid::from_row_major(&m.try_into().unwrap()))
+        })
+        .collect()
 }
 
 fn write_nrrd(path: &std::path::Path, v: &toothfuse::volume::LabelVolume) {
@@ -248,23 +261,10 @@ fn fuse_from_a_per_jaw_mask_split_by_the_ios() {
 /// Per fused tooth of `out/report.json` (output frame: the phantom's CBCT frame, where the demo
 /// writes its CBCT), the TRE of its registration against the phantom's truth.
 fn tre_by_tooth(out: &std::path::Path, p: &Phantom) -> std::collections::BTreeMap<u8, f64> {
-    let rep: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    rep["teeth"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|t| {
-            assert!(t["watertight"].as_bool().unwrap(), "{t}");
-            let fdi = t["fdi"].as_u64().unwrap() as u8;
-            let m: Vec<f64> = t["ios_to_output"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
-            let cbct_to_ios = Rigid::from_row_major(&m.try_into().unwrap()).inverse();
-            let tre = p.truth.teeth[&fdi].tre(&p.truth.world_to_cbct, &cbct_to_ios);
+    fused_teeth(out)
+        .into_iter()
+        .map(|(fdi, ios_to_cbct)| {
+            let tre = p.truth.teeth[&fdi].tre(&p.truth.world_to_cbct, &ios_to_cbct.inverse());
             (fdi, tre)
         })
         .collect()
