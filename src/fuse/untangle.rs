@@ -248,19 +248,42 @@ impl Around {
     }
 }
 
+/// A candidate's score `(crossings, turned-over faces, smallest angle)` ordered for
+/// comparison: fewer crossings first, then fewer turned-over faces, then a larger smallest
+/// angle (capped at 30°).
+type Key = (usize, usize, f64);
+
+fn key(s: (usize, usize, f64)) -> Key {
+    (s.0, s.1, -s.2.min(30.0))
+}
+
+/// Whether a key with `folded` turned-over faces and smallest angle `ang` beats `best` on
+/// those two alone (at equal crossings); a smallest angle must be larger by over 0.1°.
+fn shape_beats(folded: usize, ang: f64, best: Key) -> bool {
+    folded < best.1 || (folded == best.1 && -ang.min(30.0) < best.2 - 0.1)
+}
+
+/// Whether key `a` beats key `b`.
+fn better(a: Key, b: Key) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && shape_beats(a.1, -a.2, b))
+}
+
 /// `(crossings of the star with its surroundings, star faces turned over against `normals`,
-/// smallest star angle)` with `v` where it is. Counting stops past `max_folded` turned-over
-/// faces or `max_crossings` crossings (the candidate has lost by then), or when `budget` exact
-/// tests are spent: `None`. Each pair of star faces found among `around` counts once.
+/// smallest star angle)` with `v` where it is. With `beat` (the best key so far), counting
+/// stops as soon as the candidate cannot beat it (`None`): past `max_folded` turned-over faces,
+/// past as many crossings as the best has, or, when its turned-over faces and angle do not beat
+/// the best's, past one fewer (with a best of no crossing, no exact test is run at all). `None`
+/// too when `budget` exact tests are spent. Each pair of star faces found among `around` counts
+/// once.
 fn score(
     mesh: &TriMesh,
     star: &[u32],
     normals: &[DVec3],
     around: &Around,
-    limits: (usize, usize),
+    max_folded: usize,
+    beat: Option<Key>,
     budget: &mut usize,
 ) -> Option<(usize, usize, f64)> {
-    let (max_folded, max_crossings) = limits;
     let mut ang = 180.0f64;
     let mut folded = 0;
     let mut boxes = Vec::with_capacity(star.len());
@@ -276,6 +299,11 @@ fn score(
     if folded > max_folded {
         return None;
     }
+    let max_crossings = match beat {
+        None => usize::MAX,
+        Some(b) if shape_beats(folded, ang, b) => b.0,
+        Some(b) => b.0.checked_sub(1)?,
+    };
     let mut crossings = 0;
     let mut count = |f: u32, g: u32| {
         if *budget == 0 {
@@ -343,14 +371,7 @@ fn improve_vertex(
     }
     let grow = DVec3::splat(0.5 * scale);
     let around = Around::new(mesh, star, &grid.faces_in_box(lo - grow, hi + grow));
-    let Some(current) = score(
-        mesh,
-        star,
-        &normals,
-        &around,
-        (usize::MAX, usize::MAX),
-        budget,
-    ) else {
+    let Some(current) = score(mesh, star, &normals, &around, usize::MAX, None, budget) else {
         return false;
     };
     let centroid = ring
@@ -407,10 +428,6 @@ fn improve_vertex(
     }
     // Fewer crossings first, then fewer turned-over faces, then a larger smallest angle; a
     // move may never turn more faces over.
-    let key = |s: (usize, usize, f64)| (s.0, s.1, -s.2.min(30.0));
-    let better = |a: (usize, usize, f64), b: (usize, usize, f64)| {
-        a.0 < b.0 || (a.0 == b.0 && (a.1 < b.1 || (a.1 == b.1 && a.2 < b.2 - 0.1)))
-    };
     let mut best = (key(current), p0);
     // Nothing beats no crossing, no turned-over face and every angle at the cap.
     let perfect = (0, 0, -30.0);
@@ -422,7 +439,15 @@ fn improve_vertex(
             continue;
         }
         mesh.positions[vi] = c;
-        let Some(s) = score(mesh, star, &normals, &around, (current.1, best.0.0), budget) else {
+        let Some(s) = score(
+            mesh,
+            star,
+            &normals,
+            &around,
+            current.1,
+            Some(best.0),
+            budget,
+        ) else {
             if *budget == 0 {
                 break;
             }

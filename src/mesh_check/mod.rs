@@ -26,6 +26,25 @@ pub fn self_intersections(mesh: &TriMesh) -> Vec<(u32, u32)> {
     out
 }
 
+/// `min(self_intersections(mesh).len(), limit)`, found without testing past the `limit`-th
+/// intersecting pair: enough to tell whether a mesh crosses itself less than another does.
+pub fn self_intersections_up_to(mesh: &TriMesh, limit: usize) -> usize {
+    if limit == 0 {
+        return 0;
+    }
+    let grid = TriangleGrid::new(mesh, 0.0);
+    let mut n = 0;
+    for (f, g) in grid.candidate_pairs(mesh) {
+        if triangles_intersect(mesh, f as usize, g as usize) {
+            n += 1;
+            if n == limit {
+                break;
+            }
+        }
+    }
+    n
+}
+
 /// Number of degenerate faces: repeated index or exactly zero area (exactly collinear corners).
 pub fn degenerate_faces(mesh: &TriMesh) -> usize {
     (0..mesh.triangles.len())
@@ -63,6 +82,12 @@ mod tests {
         let s = self_intersections(&m);
         assert!(!s.is_empty());
         assert!(s.iter().all(|&(f, g)| f < 12 && g >= 12));
+        // Counting up to a limit stops there.
+        assert!(s.len() > 4, "{}", s.len());
+        assert_eq!(self_intersections_up_to(&m, 3), 3);
+        assert_eq!(self_intersections_up_to(&m, s.len() + 10), s.len());
+        assert_eq!(self_intersections_up_to(&m, 0), 0);
+        assert_eq!(self_intersections_up_to(&cube(1.0), 5), 0);
     }
 
     #[test]

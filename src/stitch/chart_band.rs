@@ -3,9 +3,7 @@
 
 use super::chart::{Lift, RefCurve, convex_reference, harmonic, wrap};
 use super::chart_sample::{SampleOptions, sample};
-use super::{
-    Band, BandLoops, BandVertex, StitchOptions, mean_edge, smooth, smooth_dirs, triangulate,
-};
+use super::{Band, BandLoops, BandVertex, StitchOptions, loop_cdt, mean_edge, smooth, smooth_dirs};
 use crate::cut::ToothFrame;
 use crate::{Error, Result};
 use glam::DVec3;
@@ -92,7 +90,6 @@ pub(super) fn chart_band(
     let mut attempt = 0;
     let (mut up_c, mut lo_c) = (up_c, lo_c);
     let (inner, y0, (mut band, origin)) = loop {
-        let inner = sample(&up_c, &lo_c, period, &so);
         let y0 = lo_c.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min);
         let plane = |c: [f64; 2]| {
             let r = (TAU * (c[1] - y0) / period).exp();
@@ -101,12 +98,17 @@ pub(super) fn chart_band(
         };
         let up_xy: Vec<[f64; 2]> = up_c.iter().map(|&c| plane(c)).collect();
         let lo_xy: Vec<[f64; 2]> = lo_c.iter().map(|&c| plane(c)).collect();
-        let interior: Vec<([f64; 2], DVec3, f64)> = inner
-            .iter()
-            .map(|&c| (plane(c), DVec3::ZERO, 0.0))
-            .collect();
-        match triangulate(&up_xy, &lo_xy, o.uo, o.lo, &interior, loops, REFINE_DEG) {
-            Ok(t) => break (inner, y0, t),
+        // The loops first: where they do not bound an annulus, no point is sampled.
+        let filled = loop_cdt(&up_xy, &lo_xy, o.uo, o.lo).and_then(|lc| {
+            let inner = sample(&up_c, &lo_c, period, &so);
+            let interior: Vec<([f64; 2], DVec3, f64)> = inner
+                .iter()
+                .map(|&c| (plane(c), DVec3::ZERO, 0.0))
+                .collect();
+            Ok((inner, lc.fill(&interior, loops, REFINE_DEG)?))
+        });
+        match filled {
+            Ok((inner, t)) => break (inner, y0, t),
             Err(e) if attempt > 0 => return Err(e),
             Err(_) => {
                 attempt += 1;

@@ -254,6 +254,47 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
 mod tests {
     use super::*;
 
+    /// With sizes 8x apart from margin to cut, the sample covers the band: no spot of the
+    /// region is farther than ~the local size from a sample or loop point, near the fine margin
+    /// as near the coarse cut.
+    #[test]
+    fn graded_sample_covers_the_band() {
+        let period = 10.0;
+        let n_up = 200;
+        let up: Vec<[f64; 2]> = (0..n_up)
+            .map(|i| [period * i as f64 / n_up as f64, 2.0])
+            .collect();
+        let lo: Vec<[f64; 2]> = (0..25).map(|i| [period * i as f64 / 25.0, 0.0]).collect();
+        let o = SampleOptions {
+            e_upper: 0.05,
+            e_lower: 0.4,
+            radius: 0.8,
+            clearance: 0.5,
+        };
+        let s = sample(&up, &lo, period, &o);
+        let all: Vec<[f64; 2]> = s.iter().chain(&up).chain(&lo).copied().collect();
+        let size = |y: f64| o.e_lower + (o.e_upper - o.e_lower) * (y / 2.0);
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            for j in 1..80 {
+                let q = [period * i as f64 / 200.0, 2.0 * j as f64 / 80.0];
+                let d = all
+                    .iter()
+                    .map(|p| (wrap(p[0] - q[0], period).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
+                    .fold(f64::INFINITY, f64::min);
+                worst = worst.max(d / size(q[1]));
+            }
+        }
+        assert!(worst < 1.2, "a gap of {worst:.2} local sizes");
+        // And it is graded: many more points in the top tenth than in the bottom tenth.
+        let top = s.iter().filter(|p| p[1] > 1.8).count();
+        let bottom = s.iter().filter(|p| p[1] < 0.2).count();
+        assert!(
+            top > 10 * bottom.max(1),
+            "{top} near the margin, {bottom} near the cut"
+        );
+    }
+
     #[test]
     fn sample_is_inside_spaced_and_clear_of_loops() {
         let period = 20.0;

@@ -14,12 +14,14 @@ mod chart_band;
 pub mod chart_sample;
 pub mod interp;
 pub mod param;
+mod polygon;
 
 use crate::cut::ToothFrame;
 use crate::{Error, Result};
 use glam::DVec3;
 use interp::{InterpOptions, ParamPoint};
 use param::{Loft, LoopParam};
+use polygon::Polygon;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 /// The two loops to join, in the output frame.
@@ -162,11 +164,15 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
             return Ok(chart.band);
         }
         return Ok(match loft() {
-            Ok(b)
-                if band_self_intersections(&b, loops)
-                    < band_self_intersections(&chart.band, loops) =>
-            {
-                b
+            Ok(b) => {
+                // The loft usually crosses itself many times more than the folded chart band:
+                // its count stops at the chart band's.
+                let chart_count = band_self_intersections(&chart.band, loops, usize::MAX);
+                if band_self_intersections(&b, loops, chart_count) < chart_count {
+                    b
+                } else {
+                    chart.band
+                }
             }
             _ => chart.band,
         });
@@ -174,8 +180,9 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
     loft()
 }
 
-/// Pairs of band faces that intersect each other (exact test): how badly a band folds over.
-fn band_self_intersections(band: &Band, loops: &BandLoops) -> usize {
+/// Pairs of band faces that intersect each other (exact test), counted up to `limit`: how
+/// badly a band folds over.
+fn band_self_intersections(band: &Band, loops: &BandLoops, limit: usize) -> usize {
     let (nu, nl) = (loops.upper.len() as u32, loops.lower.len() as u32);
     let positions: Vec<DVec3> = loops
         .upper
@@ -193,7 +200,7 @@ fn band_self_intersections(band: &Band, loops: &BandLoops) -> usize {
         positions,
         band.triangles.iter().map(|t| t.map(index)).collect(),
     );
-    crate::mesh_check::self_intersections(&mesh).len()
+    crate::mesh_check::self_intersections_up_to(&mesh, limit)
 }
 
 /// The loft band: points on rings (or the paper's recursive interpolation) on a Hermite loft
@@ -301,8 +308,30 @@ fn triangulate(
     loops: &BandLoops,
     refine_deg: f64,
 ) -> Result<(Band, Vec<PointOrigin>)> {
-    let (nu, nl) = (up_xy.len(), lo_xy.len());
+    loop_cdt(up_xy, lo_xy, uo, lo)?.fill(interior, loops, refine_deg)
+}
 
+/// The first half of [`triangulate`]: both loops inserted and their edges constrained. Fails,
+/// before any interior point is made, where the loops do not bound an annulus in the plane.
+pub(crate) struct LoopCdt<'a> {
+    up_xy: &'a [[f64; 2]],
+    lo_xy: &'a [[f64; 2]],
+    uo: &'a [u32],
+    lo: &'a [u32],
+    cdt: Cdt,
+    handle_to_vertex: Vec<Option<BandVertex>>,
+    up_h: Vec<usize>,
+    lo_h: Vec<usize>,
+}
+
+/// Inserts and constrains the loops of [`triangulate`].
+pub(crate) fn loop_cdt<'a>(
+    up_xy: &'a [[f64; 2]],
+    lo_xy: &'a [[f64; 2]],
+    uo: &'a [u32],
+    lo: &'a [u32],
+) -> Result<LoopCdt<'a>> {
+    let (nu, nl) = (up_xy.len(), lo_xy.len());
     let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
         ConstrainedDelaunayTriangulation::new();
     let mut handle_to_vertex: Vec<Option<BandVertex>> = Vec::new();
@@ -345,106 +374,137 @@ fn triangulate(
             cdt.add_constraint(a, b);
         }
     }
-    let mut points = Vec::new();
-    let mut origin = Vec::new();
-    for (k, &(xy, pos, min_d)) in interior.iter().enumerate() {
-        if !pos.is_finite() {
-            continue;
-        }
-        // Strictly inside the annulus, and not closer to a loop than `min_d` (distances only
-        // when asked for: the chart's points come with none).
-        if !polygon_contains(up_xy, xy) || polygon_contains(lo_xy, xy) {
-            continue;
-        }
-        if min_d > 0.0
-            && (polygon_distance(up_xy, xy) < min_d || polygon_distance(lo_xy, xy) < min_d)
-        {
-            continue;
-        }
-        if cdt_insert(
-            &mut cdt,
-            &mut handle_to_vertex,
-            xy,
-            BandVertex::Interior(points.len() as u32),
-        )?
-        .is_some()
-        {
-            points.push(pos);
-            origin.push((xy, Some(k as u32)));
-        }
-    }
-    // Chords: split any band edge that duplicates a crown/root chord with a point in its middle.
-    let handle_of = |bv: BandVertex| -> Option<usize> {
-        match bv {
-            BandVertex::Upper(i) => uo.iter().position(|&x| x == i).map(|k| up_h[k]),
-            BandVertex::Lower(i) => lo.iter().position(|&x| x == i).map(|k| lo_h[k]),
-            BandVertex::Interior(_) => None,
-        }
-    };
-    let pos3 = |bv: BandVertex| match bv {
-        BandVertex::Upper(i) => loops.upper[i as usize],
-        BandVertex::Lower(i) => loops.lower[i as usize],
-        BandVertex::Interior(i) => points[i as usize],
-    };
-    let pending: Vec<(usize, usize, DVec3, DVec3)> = loops
-        .chords
-        .iter()
-        .filter_map(|&(a, b)| Some((handle_of(a)?, handle_of(b)?, pos3(a), pos3(b))))
-        .collect();
-    // A chord edge is broken by a point at its middle; repeat while one survives (a middle
-    // that coincides with an existing vertex).
-    for _round in 0..4 {
-        let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
-        let mut split = false;
-        for &(a, b, pa, pb) in &pending {
-            if let Some(e) = cdt.get_edge_from_neighbors(vh[a], vh[b]) {
-                let [va, vb] = e.vertices();
-                let (qa, qb) = (va.position(), vb.position());
-                let mid = [0.5 * (qa.x + qb.x), 0.5 * (qa.y + qb.y)];
-                // Only band edges matter: an edge outside the annulus is no band edge.
-                if !polygon_contains(up_xy, mid) || polygon_contains(lo_xy, mid) {
-                    continue;
-                }
-                if cdt_insert(
-                    &mut cdt,
-                    &mut handle_to_vertex,
-                    mid,
-                    BandVertex::Interior(points.len() as u32),
-                )?
-                .is_some()
-                {
-                    points.push(0.5 * (pa + pb));
-                    origin.push((mid, None));
-                    split = true;
-                }
-            }
-        }
-        if !split {
-            break;
-        }
-    }
-    if refine_deg > 0.0 {
-        refine(
-            &mut cdt,
-            &mut handle_to_vertex,
-            &mut points,
-            &mut origin,
+    Ok(LoopCdt {
+        up_xy,
+        lo_xy,
+        uo,
+        lo,
+        cdt,
+        handle_to_vertex,
+        up_h,
+        lo_h,
+    })
+}
+
+impl LoopCdt<'_> {
+    /// The second half of [`triangulate`]: the interior points, the chord splits, the
+    /// refinement and the band's faces.
+    pub(crate) fn fill(
+        self,
+        interior: &[([f64; 2], DVec3, f64)],
+        loops: &BandLoops,
+        refine_deg: f64,
+    ) -> Result<(Band, Vec<PointOrigin>)> {
+        let LoopCdt {
             up_xy,
             lo_xy,
-            refine_deg,
-        );
+            uo,
+            lo,
+            mut cdt,
+            mut handle_to_vertex,
+            up_h,
+            lo_h,
+        } = self;
+        let (nu, nl) = (up_xy.len(), lo_xy.len());
+        let (up_poly, lo_poly) = (Polygon::new(up_xy), Polygon::new(lo_xy));
+        let mut points = Vec::new();
+        let mut origin = Vec::new();
+        for (k, &(xy, pos, min_d)) in interior.iter().enumerate() {
+            if !pos.is_finite() {
+                continue;
+            }
+            // Strictly inside the annulus, and not closer to a loop than `min_d` (distances only
+            // when asked for: the chart's points come with none).
+            if !up_poly.contains(xy) || lo_poly.contains(xy) {
+                continue;
+            }
+            if min_d > 0.0 && (up_poly.distance(xy) < min_d || lo_poly.distance(xy) < min_d) {
+                continue;
+            }
+            if cdt_insert(
+                &mut cdt,
+                &mut handle_to_vertex,
+                xy,
+                BandVertex::Interior(points.len() as u32),
+            )?
+            .is_some()
+            {
+                points.push(pos);
+                origin.push((xy, Some(k as u32)));
+            }
+        }
+        // Chords: split any band edge that duplicates a crown/root chord with a point in its middle.
+        let handle_of = |bv: BandVertex| -> Option<usize> {
+            match bv {
+                BandVertex::Upper(i) => uo.iter().position(|&x| x == i).map(|k| up_h[k]),
+                BandVertex::Lower(i) => lo.iter().position(|&x| x == i).map(|k| lo_h[k]),
+                BandVertex::Interior(_) => None,
+            }
+        };
+        let pos3 = |bv: BandVertex| match bv {
+            BandVertex::Upper(i) => loops.upper[i as usize],
+            BandVertex::Lower(i) => loops.lower[i as usize],
+            BandVertex::Interior(i) => points[i as usize],
+        };
+        let pending: Vec<(usize, usize, DVec3, DVec3)> = loops
+            .chords
+            .iter()
+            .filter_map(|&(a, b)| Some((handle_of(a)?, handle_of(b)?, pos3(a), pos3(b))))
+            .collect();
+        // A chord edge is broken by a point at its middle; repeat while one survives (a middle
+        // that coincides with an existing vertex).
+        for _round in 0..4 {
+            let vh: Vec<spade::handles::FixedVertexHandle> = cdt.fixed_vertices().collect();
+            let mut split = false;
+            for &(a, b, pa, pb) in &pending {
+                if let Some(e) = cdt.get_edge_from_neighbors(vh[a], vh[b]) {
+                    let [va, vb] = e.vertices();
+                    let (qa, qb) = (va.position(), vb.position());
+                    let mid = [0.5 * (qa.x + qb.x), 0.5 * (qa.y + qb.y)];
+                    // Only band edges matter: an edge outside the annulus is no band edge.
+                    if !up_poly.contains(mid) || lo_poly.contains(mid) {
+                        continue;
+                    }
+                    if cdt_insert(
+                        &mut cdt,
+                        &mut handle_to_vertex,
+                        mid,
+                        BandVertex::Interior(points.len() as u32),
+                    )?
+                    .is_some()
+                    {
+                        points.push(0.5 * (pa + pb));
+                        origin.push((mid, None));
+                        split = true;
+                    }
+                }
+            }
+            if !split {
+                break;
+            }
+        }
+        if refine_deg > 0.0 {
+            refine(
+                &mut cdt,
+                &mut handle_to_vertex,
+                &mut points,
+                &mut origin,
+                [&up_poly, &lo_poly],
+                refine_deg,
+            );
+        }
+        let triangles: Vec<[BandVertex; 3]> =
+            band_faces_ordered(&cdt, &up_h, &lo_h, &handle_to_vertex)?;
+        // An annulus triangulation has exactly nu + nl + 2·interior triangles.
+        let expected = nu + nl + 2 * points.len();
+        if triangles.len() != expected {
+            return Err(Error::InvalidArgument(format!(
+                "band has {} triangles, an annulus with these vertices has {expected}",
+                triangles.len()
+            )));
+        }
+        Ok((Band { points, triangles }, origin))
     }
-    let triangles: Vec<[BandVertex; 3]> =
-        band_faces_ordered(&cdt, &up_h, &lo_h, &handle_to_vertex)?;
-    // An annulus triangulation has exactly nu + nl + 2·interior triangles.
-    let expected = nu + nl + 2 * points.len();
-    if triangles.len() != expected {
-        return Err(Error::InvalidArgument(format!(
-            "band has {} triangles, an annulus with these vertices has {expected}",
-            triangles.len()
-        )));
-    }
-    Ok((Band { points, triangles }, origin))
 }
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
@@ -457,8 +517,7 @@ fn refine(
     handle_to_vertex: &mut Vec<Option<BandVertex>>,
     points: &mut Vec<DVec3>,
     origin: &mut Vec<PointOrigin>,
-    up_xy: &[[f64; 2]],
-    lo_xy: &[[f64; 2]],
+    [up, lo]: [&Polygon; 2],
     deg: f64,
 ) {
     let before = cdt.num_vertices();
@@ -473,7 +532,7 @@ fn refine(
     for h in &vh[before..] {
         let q = cdt.vertex(*h).position();
         let xy = [q.x, q.y];
-        if polygon_contains(up_xy, xy) && !polygon_contains(lo_xy, xy) {
+        if up.contains(xy) && !lo.contains(xy) {
             handle_to_vertex[h.index()] = Some(BandVertex::Interior(points.len() as u32));
             points.push(DVec3::ZERO);
             origin.push((xy, None));
@@ -495,7 +554,7 @@ fn refine(
             let c = f.center();
             [c.x, c.y]
         })
-        .filter(|&xy| polygon_contains(up_xy, xy) && !polygon_contains(lo_xy, xy))
+        .filter(|&xy| up.contains(xy) && !lo.contains(xy))
         .collect();
     for xy in centroids {
         let bv = BandVertex::Interior(points.len() as u32);
@@ -678,43 +737,6 @@ fn smooth_dirs(d: &[DVec3], iters: usize) -> Vec<DVec3> {
             if u == DVec3::ZERO { *o } else { u }
         })
         .collect()
-}
-
-/// Whether `q` is inside the closed polygon `poly` (even-odd).
-fn polygon_contains(poly: &[[f64; 2]], q: [f64; 2]) -> bool {
-    let n = poly.len();
-    let mut inside = false;
-    for i in 0..n {
-        let a = poly[i];
-        let b = poly[(i + 1) % n];
-        if (a[1] > q[1]) != (b[1] > q[1]) {
-            let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if q[0] < x {
-                inside = !inside;
-            }
-        }
-    }
-    inside
-}
-
-/// Distance from `q` to the closed polygon `poly`.
-fn polygon_distance(poly: &[[f64; 2]], q: [f64; 2]) -> f64 {
-    let n = poly.len();
-    let mut best = f64::INFINITY;
-    for i in 0..n {
-        let a = poly[i];
-        let b = poly[(i + 1) % n];
-        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-        let l2 = ex * ex + ey * ey;
-        let t = if l2 > 0.0 {
-            (((q[0] - a[0]) * ex + (q[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let (dx, dy) = (a[0] + t * ex - q[0], a[1] + t * ey - q[1]);
-        best = best.min((dx * dx + dy * dy).sqrt());
-    }
-    best
 }
 
 /// Inserts a plane point; `None` if it coincides with an existing vertex.
