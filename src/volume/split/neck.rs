@@ -113,40 +113,58 @@ impl Pair {
         }
     }
 
-    /// Voxels from which a sink is still reachable over faces with spare capacity: the sink's
-    /// side of the narrowest cut nearest the sinks (every narrowest cut leaves them there).
-    fn sink_side(&self) -> Vec<bool> {
-        let mut side = self.sink.clone();
-        let mut queue: VecDeque<usize> = (0..side.len()).filter(|&v| side[v]).collect();
+    /// After the maximum flow, the sources' side of the narrowest cut nearest them (voxels a
+    /// source still reaches over faces with spare capacity) and the sinks' side of the narrowest
+    /// cut nearest them (voxels that still reach a sink): every narrowest cut leaves the first
+    /// on the sources' side and the second on the sinks'.
+    fn sides(&self) -> (Vec<bool>, Vec<bool>) {
+        // Spare capacity from u into v across v's face d: 1 - flow(u → v) = 1 + flow(v → u).
+        let from_sources = self.reach(&self.source, |v, d| self.spare(v, d) > 0);
+        let to_sinks = self.reach(&self.sink, |v, d| self.flow[v][d] > -1);
+        (from_sources, to_sinks)
+    }
+
+    /// Voxels reached from `start` through faces `open(v, d)` lets through.
+    fn reach(&self, start: &[bool], open: impl Fn(usize, usize) -> bool) -> Vec<bool> {
+        let mut seen = start.to_vec();
+        let mut queue: VecDeque<usize> = (0..seen.len()).filter(|&v| seen[v]).collect();
         while let Some(v) = queue.pop_front() {
             for d in 0..6 {
                 let u = self.nb[v][d];
-                // Spare capacity from u into v: 1 - flow(u → v) = 1 + flow(v → u).
-                if u != NONE && !side[u as usize] && self.flow[v][d] > -1 {
-                    side[u as usize] = true;
+                if u != NONE && !seen[u as usize] && open(v, d) {
+                    seen[u as usize] = true;
                     queue.push_back(u as usize);
                 }
             }
         }
-        side
+        seen
     }
 }
 
-/// The voxels of tooth `a` beyond the narrowest cut between the seeds of `a` and of `b` inside
-/// the two teeth's voxels (`best`: the tooth per box voxel), on `b`'s side of every such cut.
-fn beyond(mask: &JawMask, best: &[u8], seeds: &[u8], a: u8, b: u8) -> usize {
+/// For touching teeth `a` and `b`: the voxels of `a` beyond the narrowest cut between the seeds
+/// of `a` and of `b` inside the two teeth's voxels (on `b`'s side of every such cut), and those
+/// of `b` beyond it. `best`: the tooth per box voxel; `local`: a scratch index per box voxel,
+/// all `NONE` (left so).
+fn beyond(
+    mask: &JawMask,
+    best: &[u8],
+    seeds: &[u8],
+    (a, b): (u8, u8),
+    local: &mut [u32],
+) -> (usize, usize) {
     let ids: Vec<usize> = (0..best.len())
         .filter(|&id| mask.inside[id] && (best[id] == a || best[id] == b))
         .collect();
-    let local: BTreeMap<usize, u32> = ids
-        .iter()
-        .enumerate()
-        .map(|(l, &id)| (id, l as u32))
-        .collect();
+    for (l, &id) in ids.iter().enumerate() {
+        local[id] = l as u32;
+    }
     let nb = ids
         .iter()
-        .map(|&id| FACES.map(|f| local.get(&mask.step(id, f)).copied().unwrap_or(NONE)))
+        .map(|&id| FACES.map(|f| local[mask.step(id, f)]))
         .collect();
+    for &id in &ids {
+        local[id] = NONE;
+    }
     let mut pair = Pair {
         nb,
         source: ids.iter().map(|&id| seeds[id] == a).collect(),
@@ -154,14 +172,17 @@ fn beyond(mask: &JawMask, best: &[u8], seeds: &[u8], a: u8, b: u8) -> usize {
         flow: vec![[0; 6]; ids.len()],
     };
     if !pair.source.contains(&true) || !pair.sink.contains(&true) {
-        return 0;
+        return (0, 0);
     }
     pair.max_flow();
-    let side = pair.sink_side();
-    ids.iter()
-        .zip(side)
-        .filter(|(id, s)| *s && best[**id] == a)
-        .count()
+    let (a_side, b_side) = pair.sides();
+    let count = |side: &[bool], t: u8| {
+        ids.iter()
+            .zip(side)
+            .filter(|(id, s)| **s && best[**id] == t)
+            .count()
+    };
+    (count(&b_side, a), count(&a_side, b))
 }
 
 /// Sets each tooth's voxels beyond the narrowest cut to a touching neighbour
@@ -187,9 +208,10 @@ pub(crate) fn overrun(
         }
     }
     let mut most: BTreeMap<u8, (usize, u8)> = BTreeMap::new();
+    let mut local = vec![NONE; best.len()];
     for (a, b) in pairs {
-        for (x, y) in [(a, b), (b, a)] {
-            let n = beyond(mask, best, seeds, x, y);
+        let (in_b, in_a) = beyond(mask, best, seeds, (a, b), &mut local);
+        for (x, y, n) in [(a, b, in_b), (b, a, in_a)] {
             if let Some(t) = teeth.get_mut(&x) {
                 t.overrun_voxels += n;
             }
@@ -290,6 +312,16 @@ mod tests {
         );
         assert_eq!(teeth[&41].overrun_into, Some(42));
         assert_eq!(teeth[&42].overrun_voxels, 0);
+        // The same with the teeth's numbers swapped (the overrunning tooth is then the pair's
+        // second, whose side is found from the other end of the flow).
+        let swap =
+            |v: &[u8]| -> Vec<u8> { v.iter().map(|&l| if l == 0 { 0 } else { 83 - l }).collect() };
+        let (best_sw, seeds_sw) = (swap(&f.best), swap(&seeds));
+        let (mut swapped, _) = tally(&m, &best_sw, &f, &seeds_sw, &none, 1.0);
+        overrun(&m, &best_sw, &seeds_sw, &mut swapped);
+        assert_eq!(swapped[&42].overrun_voxels, past_contact);
+        assert_eq!(swapped[&42].overrun_into, Some(41));
+        assert_eq!(swapped[&41].overrun_voxels, 0);
         // The true split overruns nothing.
         let (mut right, _) = tally(&m, &truth, &f, &seeds, &none, 1.0);
         overrun(&m, &truth, &seeds, &mut right);
