@@ -5,7 +5,7 @@
 //! truth) and as DentalSegmentator's one upper-teeth class 3 (the input of the split). Per split
 //! tooth, the share of its voxels that belong to another true tooth is measured against the
 //! split's own confidence: a tooth split wrong by more than 5 % of its voxels must be refused or
-//! reported as contested.
+//! reported (as contested, or as lying beyond the narrowest cut to a neighbour).
 
 use glam::{DMat3, DVec3};
 use std::collections::BTreeMap;
@@ -125,14 +125,15 @@ fn split_and_measure(
             .map_or(Wrong::default(), |w| Wrong { ..*w });
         eprintln!(
             "{what}: tooth {fdi}: {} voxels, {} ({:.2}%) of another tooth, {:.1}% of its surface \
-             voxels; reported {:.2}% contested, {:.1}% outside, {:.1}% of its boundary drawn \
-             by the split; refused: {:?}",
+             voxels; reported {:.2}% contested, {:.1}% outside, {:.2}% beyond the narrowest cut \
+             to a neighbour, {:.1}% of its boundary drawn by the split; refused: {:?}",
             w.voxels,
             w.wrong,
             100.0 * w.share(),
             100.0 * w.surface_share(),
             100.0 * t.contested_share(),
             100.0 * t.outside_share(),
+            100.0 * t.overrun_share(),
             100.0 * t.interface_share(),
             jaw.refused.get(fdi)
         );
@@ -155,9 +156,15 @@ fn where_teeth_touch_the_split_follows_each_root() {
         let w = &wrong[&(*fdi as u16)];
         assert!(w.share() < 0.005, "tooth {fdi}: {w:?}");
         assert!(w.surface_share() < 0.02, "tooth {fdi}: {w:?}");
+        // The share beyond the narrowest cut to a neighbour is the share of another tooth's
+        // voxels (measured: equal to 0.01 %).
+        assert!(
+            (t.overrun_share() - w.share()).abs() < 0.002,
+            "tooth {fdi}: {t:?}"
+        );
         // A split wrong by more than 5 % of a tooth's voxels would have to be reported.
         assert!(
-            w.share() < 0.05 || t.contested_share() > 0.05,
+            w.share() < 0.05 || t.contested_share() > 0.05 || t.overrun_share() > 0.05,
             "tooth {fdi}: {w:?}"
         );
     }
@@ -171,6 +178,9 @@ fn where_teeth_touch_the_split_follows_each_root() {
     let (before_split, before) = split_and_measure(&p, &truth, &merged, &old, "no axis prior");
     assert!(before[&11].surface_share() > 0.05, "{:?}", before[&11]);
     assert!(before_split.jaws[0].teeth[&11].contested_share() < 0.02);
+    // The narrowest cut between 11 and 21 sees it: 1.82 % of 11's voxels lie beyond it.
+    let share = before_split.jaws[0].teeth[&11].overrun_share();
+    assert!((share - before[&11].share()).abs() < 0.002, "{share}");
     // The boundary 11 and 21 share: the split drew 5.9 % of 11's boundary before, 1.1 % now
     // (the teeth touch only at their crowns' contact).
     assert!(

@@ -81,8 +81,9 @@ impl Session {
                     }
                     None => format!(
                         "CBCT tooth split from the per-jaw teeth mask: {:.1}% of its voxels \
-                         contested",
-                        100.0 * t.contested_share()
+                         contested, {:.1}% beyond the narrowest cut to a neighbour",
+                        100.0 * t.contested_share(),
+                        100.0 * t.overrun_share()
                     ),
                 };
                 notes.insert(*fdi, line);

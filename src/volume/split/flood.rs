@@ -254,6 +254,12 @@ pub struct ToothSplit {
     pub boundary_faces: usize,
     /// Of them, faces to a voxel of another tooth: boundary the split drew, not the mask.
     pub interface_faces: usize,
+    /// Of its voxels, those beyond the narrowest cut of the mask between its crown and a
+    /// touching neighbour's (on the neighbour's side of it; see `neck`), summed over its
+    /// neighbours: voxels of the neighbour its flood ran into.
+    pub overrun_voxels: usize,
+    /// The neighbour it overran most, if any.
+    pub overrun_into: Option<u8>,
 }
 
 impl ToothSplit {
@@ -270,6 +276,12 @@ impl ToothSplit {
     /// Share of the tooth's voxels the long-axis prior moved to it.
     pub fn moved_share(&self) -> f64 {
         self.moved_voxels as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Share of the tooth's voxels beyond the narrowest cut to a neighbour (0 = the split's
+    /// boundaries run through the necks where the mask joins the teeth).
+    pub fn overrun_share(&self) -> f64 {
+        self.overrun_voxels as f64 / self.voxels.max(1) as f64
     }
 
     /// Share of the tooth's boundary drawn by the split (faces to another tooth's voxels)

@@ -3,15 +3,17 @@
 //! crowns: the crowns are registered as one rigid arch to the jaw's mask surface
 //! ([`ArchFit`]), refused when the fit is not trustworthy; the mask is then split by a
 //! nearest-crown flood inside the mask, seeded by the registered crowns and steered by each
-//! tooth's long axis (see `flood`); each tooth carries a split confidence (the share of its
-//! voxels whose assignment is contested) and teeth whose split cannot be trusted are refused
-//! with the reason. The result is a per-tooth
+//! tooth's long axis (see `flood`); each tooth carries its split's confidence (the shares of
+//! its voxels whose assignment is contested, that lie beyond its crown's footprint, and that lie
+//! beyond the narrowest cut of the mask to a touching neighbour, see `neck`) and teeth whose
+//! split cannot be trusted are refused with the reason. The result is a per-tooth
 //! FDI label volume for [`crate::volume::surface_teeth`]; the registration here serves only
 //! the split (the per-tooth registration then runs as usual on the surfaced teeth).
 
 mod arch_fit;
 mod flood;
 mod mask;
+mod neck;
 
 pub use arch_fit::ArchFit;
 pub use flood::ToothSplit;
@@ -55,6 +57,10 @@ pub struct SplitOptions {
     pub footprint_mm: f64,
     /// A tooth is refused above this share of voxels not under its crown.
     pub max_outside_share: f64,
+    /// A tooth is refused above this share of voxels beyond the narrowest cut of the mask
+    /// between its crown and a touching neighbour's ([`ToothSplit::overrun_share`]): its flood
+    /// ran through their contact into the neighbour.
+    pub max_overrun_share: f64,
 }
 
 impl Default for SplitOptions {
@@ -72,6 +78,7 @@ impl Default for SplitOptions {
             max_contested_share: 0.25,
             footprint_mm: 3.5,
             max_outside_share: 0.2,
+            max_overrun_share: 0.05,
         }
     }
 }
@@ -117,8 +124,9 @@ impl SplitVolume {
     }
 
     /// The split as JSON: per jaw the arch fit's evidence, per tooth its voxels, contested,
-    /// outside-footprint, interface (boundary drawn by the split) and moved (by the long-axis
-    /// prior) shares and, when refused, the reason (`null` otherwise).
+    /// outside-footprint, interface (boundary drawn by the split), moved (by the long-axis
+    /// prior) and overrun (beyond the narrowest cut to a neighbour, with that neighbour) shares
+    /// and, when refused, the reason (`null` otherwise).
     pub fn to_json(&self) -> String {
         let jaws: Vec<serde_json::Value> = self
             .jaws
@@ -135,6 +143,8 @@ impl SplitVolume {
                             "outside_share": t.outside_share(),
                             "interface_share": t.interface_share(),
                             "moved_share": t.moved_share(),
+                            "overrun_share": t.overrun_share(),
+                            "overrun_into": t.overrun_into,
                             "refused": j.refused.get(fdi),
                         })
                     })
@@ -154,7 +164,7 @@ impl SplitVolume {
         serde_json::to_string_pretty(&v).unwrap_or_default()
     }
 
-    /// One line per split tooth: its contested share, or why it was refused.
+    /// One line per split tooth: its confidence shares, or why it was refused.
     pub fn summary(&self) -> Vec<String> {
         let mut out = Vec::new();
         for j in &self.jaws {
@@ -163,11 +173,12 @@ impl SplitVolume {
                     Some(r) => format!("tooth {fdi}: refused: {r}"),
                     None => format!(
                         "tooth {fdi}: split from the per-jaw mask, {} voxels, {:.1}% contested, \
-                         {:.1}% outside its crown's footprint, {:.1}% of its boundary drawn by \
-                         the split",
+                         {:.1}% outside its crown's footprint, {:.1}% beyond the narrowest cut \
+                         to a neighbour, {:.1}% of its boundary drawn by the split",
                         t.voxels,
                         100.0 * t.contested_share(),
                         100.0 * t.outside_share(),
+                        100.0 * t.overrun_share(),
                         100.0 * t.interface_share()
                     ),
                 });
@@ -303,6 +314,7 @@ fn split_jaw(
     let margin = opts.contested_margin_mm as f32;
     let (mut teeth, unreached_voxels) =
         flood::tally(&mask, &best, &plain, &seeds, &outside, margin);
+    neck::overrun(&mask, &best, &seeds, &mut teeth);
     let refused = refuse(&fit, crowns, &mut teeth, opts);
     let labels = best
         .iter()
@@ -445,6 +457,17 @@ fn refuse(
                 100.0 * t.outside_share(),
                 o.footprint_mm,
                 100.0 * o.max_outside_share
+            ))
+        } else if t.overrun_share() > o.max_overrun_share {
+            let nb = t
+                .overrun_into
+                .map_or("a neighbour".to_string(), |w| format!("tooth {w}"));
+            Some(format!(
+                "{:.0}% of its voxels lie beyond the narrowest cut of the mask between its crown \
+                 and {nb}'s (limit {:.0}%): its split ran through their contact into {nb} (whose \
+                 split then lacks them)",
+                100.0 * t.overrun_share(),
+                100.0 * o.max_overrun_share
             ))
         } else {
             None
