@@ -213,13 +213,26 @@ void fuse_demo_jaw(tf::Session& s, const std::string& jd, std::vector<int32_t>& 
   }
 }
 
-TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
-  const char* dir = std::getenv("TOOTHFUSE_JAWS_DIR");
-  ASSERT_NE(dir, nullptr) << "TOOTHFUSE_JAWS_DIR unset (the demo_jaws fixture sets it)";
-  size_t jaws = 0, teeth = 0, skipped = 0, failed = 0;
+// The demo jaw directories `$env/jaw_0`, `jaw_1`, ... that hold an ios.ply, in order; none (and
+// a test failure) when the fixture did not set `env`.
+std::vector<std::string> demo_jaw_dirs(const char* env, const char* fixture) {
+  std::vector<std::string> out;
+  const char* dir = std::getenv(env);
+  if (dir == nullptr) {
+    ADD_FAILURE() << env << " unset (the " << fixture << " fixture sets it)";
+    return out;
+  }
   for (int k = 0;; k++) {
     std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
     if (!std::ifstream(jd + "/ios.ply").good()) break;
+    out.push_back(jd);
+  }
+  return out;
+}
+
+TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
+  size_t jaws = 0, teeth = 0, skipped = 0, failed = 0;
+  for (const std::string& jd : demo_jaw_dirs("TOOTHFUSE_JAWS_DIR", "demo_jaws")) {
     tf::Session s;
     std::vector<int32_t> fdis;
     std::vector<std::pair<int32_t, std::string>> notFused;
@@ -264,13 +277,9 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
 // met there) and some teeth keep crossing pairs with a band face (the library reports them; the
 // Rust test fuse_rough bounds them at 30 per tooth).
 TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
-  const char* dir = std::getenv("TOOTHFUSE_ROUGH_JAWS_DIR");
-  ASSERT_NE(dir, nullptr) << "TOOTHFUSE_ROUGH_JAWS_DIR unset (the rough_jaws fixture sets it)";
   const CrownLimits rough{0.08, 30, true};
   size_t jaws = 0, teeth = 0, crossings = 0, trimmedTeeth = 0;
-  for (int k = 0;; k++) {
-    std::string jd = std::string(dir) + "/jaw_" + std::to_string(k);
-    if (!std::ifstream(jd + "/ios.ply").good()) break;
+  for (const std::string& jd : demo_jaw_dirs("TOOTHFUSE_ROUGH_JAWS_DIR", "rough_jaws")) {
     tf::Session s;
     std::vector<int32_t> fdis;
     std::vector<std::pair<int32_t, std::string>> notFused;
