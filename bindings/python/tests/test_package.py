@@ -141,6 +141,30 @@ def test_per_jaw_volume_is_split_with_the_ios_added_first():
         assert s.teeth(toothfuse.CBCT) == []
 
 
+def test_label_volume_flipped_between_lps_and_ras():
+    """flip_lps_ras negates the world x and y of the volume's mapping: the surfaced tooth is the
+    unflipped one with x and y negated, whether the mapping is given as spacing + origin or as
+    a matrix."""
+    ii, jj, kk = np.indices((24, 24, 30))
+    labels = np.zeros((24, 24, 30), dtype=np.uint8)
+    labels[(ii - 11.5) ** 2 + (jj - 12) ** 2 + 0.5 * (kk - 15) ** 2 < 40] = 11
+    spacing, origin = (0.4, 0.4, 0.4), (3.0, -2.0, 7.0)
+    matrix = [[0.4, 0, 0, 3.0], [0, 0.4, 0, -2.0], [0, 0, 0.4, 7.0], [0, 0, 0, 1]]
+    meshes = []
+    for kw in [dict(spacing=spacing, origin=origin),
+               dict(spacing=spacing, origin=origin, flip_lps_ras=True),
+               dict(voxel_to_world=matrix, flip_lps_ras=True)]:
+        with toothfuse.Session() as s:
+            assert s.add_label_volume(labels, **kw) == 1
+            pos, idx = s.mesh(toothfuse.CBCT, 11)
+            meshes.append((np.array(pos).reshape(-1, 3), list(idx)))
+    (p0, t0), (p1, t1), (p2, t2) = meshes
+    assert len(p0) > 100 and p0[:, 0].min() > 2.9
+    assert t1 == t2 and np.array_equal(p1, p2)
+    assert len(p1) == len(p0)
+    assert np.allclose(p1, p0 * [-1, -1, 1], atol=1e-9)
+
+
 def _arch_cap(c, r, nu=32, nv=10):
     """Open upper cap (polar angle up to 1.9 rad) of a ball of radius r at c: (vertices, tris)."""
     pts = [np.array(c) + [0.0, 0.0, r]]

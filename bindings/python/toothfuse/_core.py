@@ -329,7 +329,7 @@ class Session:
         return self.teeth(modality)
 
     def add_label_volume(self, labels, dims=None, voxel_to_world=None, spacing=None,
-                         origin=None, scheme="fdi"):
+                         origin=None, scheme="fdi", flip_lps_ras=False):
         """Adds the CBCT teeth of a label volume (one label per tooth), each surfaced to a closed
         mesh in the world frame of voxel_to_world (16 floats, row-major 4x4, voxel index ->
         mm; e.g. nibabel's img.affine for RAS, or an LPS matrix) or of spacing + origin (axis-
@@ -338,7 +338,9 @@ class Session:
         "toothfairy2" or "dentalsegmentator" (one teeth label per jaw, 3 upper and 4 lower: split
         into teeth with the IOS teeth already added, so add the IOS first; each tooth's split,
         its contested share or why it was refused, is in the warnings / skipped notes after
-        register or fuse). All or nothing. Returns the number of teeth added."""
+        register or fuse). flip_lps_ras negates the world x and y of the mapping (an LPS
+        matrix becomes RAS and back: e.g. nibabel's RAS affine for meshes in LPS, as 3D Slicer
+        and ITK write them). All or nothing. Returns the number of teeth added."""
         schemes = {"fdi": 0, "universal": 1, "toothfairy2": 2, "dentalsegmentator": 3}
         if scheme not in schemes:
             raise ValueError(f"scheme {scheme!r} is not one of {sorted(schemes)}")
@@ -369,11 +371,20 @@ class Session:
             keep = arr
         d = (ctypes.c_size_t * 3)(*[int(x) for x in dims])
         m = sp = org = None
-        if voxel_to_world is not None:
-            m = (ctypes.c_double * 16)(*[float(x) for x in _flat(voxel_to_world)])
+        if voxel_to_world is None and (spacing is None or origin is None):
+            raise ValueError("give voxel_to_world, or spacing and origin")
+        if voxel_to_world is not None or flip_lps_ras:
+            if voxel_to_world is not None:
+                rows = [float(x) for x in _flat(voxel_to_world)]
+                if len(rows) != 16:
+                    raise ValueError(f"voxel_to_world needs 16 values, got {len(rows)}")
+            else:
+                (sx, sy, sz), (ox, oy, oz) = spacing, origin
+                rows = [sx, 0, 0, ox, 0, sy, 0, oy, 0, 0, sz, oz, 0, 0, 0, 1]
+            if flip_lps_ras:
+                rows = [-float(x) for x in rows[:8]] + [float(x) for x in rows[8:]]
+            m = (ctypes.c_double * 16)(*rows)
         else:
-            if spacing is None or origin is None:
-                raise ValueError("give voxel_to_world, or spacing and origin")
             sp = (ctypes.c_double * 3)(*[float(x) for x in spacing])
             org = (ctypes.c_double * 3)(*[float(x) for x in origin])
         added = ctypes.c_size_t()
