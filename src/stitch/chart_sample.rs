@@ -254,6 +254,16 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
 mod tests {
     use super::*;
 
+    /// The chart band's radius and clearance with the given loop edge lengths.
+    fn options(e_upper: f64, e_lower: f64) -> SampleOptions {
+        SampleOptions {
+            e_upper,
+            e_lower,
+            radius: 0.8,
+            clearance: 0.5,
+        }
+    }
+
     /// With sizes 8x apart from margin to cut, the sample covers the band: no spot of the
     /// region is farther than ~the local size from a sample or loop point, near the fine margin
     /// as near the coarse cut.
@@ -265,12 +275,7 @@ mod tests {
             .map(|i| [period * i as f64 / n_up as f64, 2.0])
             .collect();
         let lo: Vec<[f64; 2]> = (0..25).map(|i| [period * i as f64 / 25.0, 0.0]).collect();
-        let o = SampleOptions {
-            e_upper: 0.05,
-            e_lower: 0.4,
-            radius: 0.8,
-            clearance: 0.5,
-        };
+        let o = options(0.05, 0.4);
         let s = sample(&up, &lo, period, &o);
         let all: Vec<[f64; 2]> = s.iter().chain(&up).chain(&lo).copied().collect();
         let size = |y: f64| o.e_lower + (o.e_upper - o.e_lower) * (y / 2.0);
@@ -310,12 +315,7 @@ mod tests {
         fn x_of(i: usize) -> f64 {
             20.0 * i as f64 / 70.0
         }
-        let o = SampleOptions {
-            e_upper: 0.1,
-            e_lower: 0.3,
-            radius: 0.8,
-            clearance: 0.5,
-        };
+        let o = options(0.1, 0.3);
         let s = sample(&up, &lo, period, &o);
         assert!(s.len() > 500, "{} points", s.len());
         for p in &s {
