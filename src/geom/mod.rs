@@ -48,17 +48,30 @@ pub fn centroid(points: &[DVec3]) -> Option<DVec3> {
     Some(sum / points.len() as f64)
 }
 
-/// The centroid of `points` and their principal axis (unit eigenvector of the largest
-/// eigenvalue of their scatter matrix; its sign is arbitrary), or `None` without points.
-pub fn principal_axis(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
-    let c = centroid(points)?;
+/// The scatter matrix `Σ (p − c)(p − c)ᵀ` of `points` about `c` (entries accumulated point by
+/// point, in order): what the principal axes and frames of tooth, arch and crown point sets are
+/// taken from.
+pub fn scatter<'a>(
+    points: impl IntoIterator<Item = &'a DVec3>,
+    c: DVec3,
+) -> nalgebra::Matrix3<f64> {
     let mut m = nalgebra::Matrix3::<f64>::zeros();
     for p in points {
         let d = *p - c;
-        let v = nalgebra::Vector3::new(d.x, d.y, d.z);
-        m += v * v.transpose();
+        for i in 0..3 {
+            for j in 0..3 {
+                m[(i, j)] += d[i] * d[j];
+            }
+        }
     }
-    let eig = m.symmetric_eigen();
+    m
+}
+
+/// The centroid of `points` and their principal axis (unit eigenvector of the largest
+/// eigenvalue of their [`scatter`] matrix; its sign is arbitrary), or `None` without points.
+pub fn principal_axis(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
+    let c = centroid(points)?;
+    let eig = scatter(points, c).symmetric_eigen();
     let mut best = 0;
     for k in 1..3 {
         if eig.eigenvalues[k] > eig.eigenvalues[best] {

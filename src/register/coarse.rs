@@ -6,7 +6,6 @@ use super::icp::{Normal7, Pair, step_about, weights};
 use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
-use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 
 /// Result of the coarse stage.
@@ -141,16 +140,7 @@ pub(crate) fn coarse_with_restarts(
     }
     let cs: Vec<DVec3> = teeth.values().map(|d| d.ios_centroid).collect();
     let c = cs.iter().fold(DVec3::ZERO, |a, p| a + *p) / cs.len() as f64;
-    let mut cov = Matrix3::<f64>::zeros();
-    for p in &cs {
-        let d = *p - c;
-        for i in 0..3 {
-            for j in 0..3 {
-                cov[(i, j)] += d[i] * d[j];
-            }
-        }
-    }
-    let eig = cov.symmetric_eigen();
+    let eig = crate::geom::scatter(&cs, c).symmetric_eigen();
     let mut best = first;
     for a in 0..3 {
         let v = eig.eigenvectors.column(a);

@@ -12,7 +12,6 @@ use crate::register::icp::{Normal7, Pair, RobustKernel, WeightOptions, step_abou
 use crate::{Error, Result};
 use glam::{DMat3, DVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 
 /// A crown point with its outward normal and tooth.
@@ -193,16 +192,7 @@ fn mean(it: impl Iterator<Item = DVec3>) -> DVec3 {
 /// Centroid and principal axes (columns, by decreasing variance, right-handed) of points.
 fn principal_frame(points: &[DVec3]) -> (DVec3, DMat3) {
     let c = mean(points.iter().copied());
-    let mut cov = Matrix3::<f64>::zeros();
-    for p in points {
-        let d = *p - c;
-        for i in 0..3 {
-            for j in 0..3 {
-                cov[(i, j)] += d[i] * d[j];
-            }
-        }
-    }
-    let eig = cov.symmetric_eigen();
+    let eig = crate::geom::scatter(points, c).symmetric_eigen();
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let col = |a: usize| {
