@@ -126,13 +126,18 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
 /// faces or are listed in `extra` (crown faces the band could not clear), with the faces between
 /// them and the margin, and repairs it back to one disk. Returns `None` when nothing had to go.
 /// `dist_in` is the geodesic distance of each *input* vertex from the original margin
-/// ([`edge_distance`] over the first crown), so repeated calls never reach farther.
+/// ([`edge_distance`] over the first crown), so repeated calls never reach farther. With
+/// `listed_apex`, a face of `extra` counts as fringe also when only one of its corners lies
+/// beyond the reach (a coarse crown's face on a margin edge, its apex farther than the reach):
+/// removing it keeps that corner in the faces around, and a round that would lose a vertex
+/// beyond the reach is undone as always.
 pub fn trim_fringe(
     crown: &TriMesh,
     src: &[u32],
     dist_in: &[f64],
     reach: f64,
     extra: &[u32],
+    listed_apex: bool,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
     let mut mesh = crown.clone();
     let mut map = src.to_vec();
@@ -145,9 +150,11 @@ pub fn trim_fringe(
     for _ in 0..4 {
         let fringe: Vec<u32> = (0..mesh.triangles.len() as u32)
             .filter(|&f| {
-                mesh.triangles[f as usize]
+                let near = mesh.triangles[f as usize]
                     .iter()
-                    .all(|&v| in_reach(&map, v))
+                    .filter(|&&v| in_reach(&map, v))
+                    .count();
+                near == 3 || (listed_apex && near == 2 && extra_faces.contains(&f))
             })
             .collect();
         let is_fringe = {
@@ -292,4 +299,35 @@ pub fn trim_fringe(
         }
     }
     Some((mesh, map, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fan crown: apex 0 at 1 mm from its margin (the ring 1..=8). A listed face on a
+    /// margin edge goes only with `listed_apex`, and then alone: its apex stays in the faces
+    /// around, so no vertex is lost and the crown stays one disk.
+    #[test]
+    fn a_listed_margin_face_goes_with_its_apex_beyond_the_reach_kept() {
+        let mut positions = vec![DVec3::new(0.0, 0.0, 1.0)];
+        positions.extend((0..8).map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 8.0;
+            DVec3::new(a.cos(), a.sin(), 0.0)
+        }));
+        let triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
+        let crown = TriMesh::new(positions, triangles);
+        let src: Vec<u32> = (0..9).collect();
+        let dist_in = edge_distance(&crown, &(1..=8).collect::<Vec<u32>>(), 10.0);
+        assert!(dist_in[0] > 0.3 && dist_in[1..].iter().all(|&d| d == 0.0));
+        assert!(trim_fringe(&crown, &src, &dist_in, 0.3, &[2], false).is_none());
+        let (trimmed, map, t) = trim_fringe(&crown, &src, &dist_in, 0.3, &[2], true).unwrap();
+        assert_eq!((t.faces, t.vertices), (1, 0), "{t:?}");
+        assert_eq!(trimmed.triangles.len(), 7);
+        assert_eq!(map.len(), 9);
+        assert_eq!(boundary_loops(&trimmed).len(), 1);
+        // The apex is now on the margin, at its position.
+        let apex = map.iter().position(|&s| s == 0).unwrap();
+        assert_eq!(trimmed.positions[apex], crown.positions[0]);
+    }
 }

@@ -209,9 +209,14 @@ fn cut_inner(
                     dist_in[s as usize] = dist_in[s as usize].min(d[v]);
                 }
             }
-            if let Some((m, map, t)) =
-                super::fringe::trim_fringe(&crown, &rep_src, &dist_in, opts.fringe_reach_mm, &[])
-            {
+            if let Some((m, map, t)) = super::fringe::trim_fringe(
+                &crown,
+                &rep_src,
+                &dist_in,
+                opts.fringe_reach_mm,
+                &[],
+                false,
+            ) {
                 crown = m;
                 rep_src = map;
                 trimmed = t;
@@ -422,13 +427,18 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == 6 {
             break;
         }
-        let Some((crown, map, t)) = super::fringe::trim_fringe(
-            &side.crown,
-            &side.ios_vertex,
-            &ct.dist_in,
-            opts.fringe_reach_mm,
-            &hits,
-        ) else {
+        // Only where nothing within the reach can go: a crossed face whose apex lies beyond it.
+        let trim = |listed_apex| {
+            super::fringe::trim_fringe(
+                &side.crown,
+                &side.ios_vertex,
+                &ct.dist_in,
+                opts.fringe_reach_mm,
+                &hits,
+                listed_apex,
+            )
+        };
+        let Some((crown, map, t)) = trim(false).or_else(|| trim(true)) else {
             break;
         };
         let margin = boundary_loops(&crown)
