@@ -11,8 +11,9 @@ use glam::DVec3;
 use std::collections::HashMap;
 
 /// Smallest angle (degrees) of a triangle given by corner positions (0 for a degenerate one):
-/// the smallest of [`triangle_angles`](super::quality::triangle_angles), found as the angle at the corner with the largest
-/// cosine (computed as `angle_between` does), so with one inverse cosine instead of three.
+/// the smallest of [`triangle_angles`](super::quality::triangle_angles), found as the angle at
+/// the corner with the largest cosine (computed as `angle_between` does), so with one inverse
+/// cosine instead of three.
 pub(super) fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let cos = |p: DVec3, q: DVec3, r: DVec3| {
         let (u, v) = (q - p, r - p);

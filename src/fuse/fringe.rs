@@ -146,15 +146,22 @@ pub fn trim_fringe(
         let s = map[v as usize];
         s != u32::MAX && dist_in.get(s as usize).is_some_and(|&d| d <= reach)
     };
-    let mut extra_faces: Vec<u32> = extra.to_vec();
+    // The faces of `extra`, for the first round only (the crown changes after it).
+    let mut listed = vec![false; mesh.triangles.len()];
+    for &f in extra {
+        if let Some(l) = listed.get_mut(f as usize) {
+            *l = true;
+        }
+    }
     for _ in 0..4 {
+        let is_listed = |f: u32| listed.get(f as usize).copied().unwrap_or(false);
         let fringe: Vec<u32> = (0..mesh.triangles.len() as u32)
             .filter(|&f| {
                 let near = mesh.triangles[f as usize]
                     .iter()
                     .filter(|&&v| in_reach(&map, v))
                     .count();
-                near == 3 || (listed_apex && near == 2 && extra_faces.contains(&f))
+                near == 3 || (listed_apex && near == 2 && is_listed(f))
             })
             .collect();
         let is_fringe = {
@@ -181,12 +188,10 @@ pub fn trim_fringe(
             };
             bad[pick as usize] = true;
         }
-        for &f in &extra_faces {
-            if (f as usize) < bad.len() {
-                bad[f as usize] = true;
-            }
+        for (b, &l) in bad.iter_mut().zip(&listed) {
+            *b |= l;
         }
-        extra_faces.clear();
+        listed.clear();
         // Only faces with an edge on the margin go in one round (peeling): removing a face
         // deeper in would cut a slot into the crown, and a margin that doubles back on itself
         // no longer charts around the tooth. What lies under a removed face is looked at again

@@ -16,14 +16,7 @@ use crate::mesh::TriMesh;
 /// the vertices/edge they have in common in the mesh (crossing, touching, coplanar overlap,
 /// fold-over). Sorted. Exact: decided with robust orientation predicates.
 pub fn self_intersections(mesh: &TriMesh) -> Vec<(u32, u32)> {
-    let grid = TriangleGrid::new(mesh, 0.0);
-    let mut out = Vec::new();
-    for (f, g) in grid.candidate_pairs(mesh) {
-        if triangles_intersect(mesh, f as usize, g as usize) {
-            out.push((f, g));
-        }
-    }
-    out
+    intersecting_pairs(mesh).collect()
 }
 
 /// `min(self_intersections(mesh).len(), limit)`, found without testing past the `limit`-th
@@ -32,17 +25,15 @@ pub fn self_intersections_up_to(mesh: &TriMesh, limit: usize) -> usize {
     if limit == 0 {
         return 0;
     }
+    intersecting_pairs(mesh).take(limit).count()
+}
+
+/// The intersecting pairs of [`self_intersections`], tested lazily in order.
+fn intersecting_pairs(mesh: &TriMesh) -> impl Iterator<Item = (u32, u32)> + '_ {
     let grid = TriangleGrid::new(mesh, 0.0);
-    let mut n = 0;
-    for (f, g) in grid.candidate_pairs(mesh) {
-        if triangles_intersect(mesh, f as usize, g as usize) {
-            n += 1;
-            if n == limit {
-                break;
-            }
-        }
-    }
-    n
+    grid.candidate_pairs(mesh)
+        .into_iter()
+        .filter(move |&(f, g)| triangles_intersect(mesh, f as usize, g as usize))
 }
 
 /// Number of degenerate faces: repeated index or exactly zero area (exactly collinear corners).

@@ -139,7 +139,9 @@ pub(crate) fn coarse_with_restarts(
         return first;
     }
     let cs: Vec<DVec3> = teeth.values().map(|d| d.ios_centroid).collect();
-    let c = cs.iter().fold(DVec3::ZERO, |a, p| a + *p) / cs.len() as f64;
+    let Some(c) = crate::geom::centroid(&cs) else {
+        return first;
+    };
     let eig = crate::geom::scatter(&cs, c).symmetric_eigen();
     let mut best = first;
     for a in 0..3 {
