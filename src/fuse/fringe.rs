@@ -129,8 +129,9 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
 /// ([`edge_distance`] over the first crown), so repeated calls never reach farther. With
 /// `listed_apex`, a face of `extra` counts as fringe also when only one of its corners lies
 /// beyond the reach (a coarse crown's face on a margin edge, its apex farther than the reach):
-/// removing it keeps that corner in the faces around, and a round that would lose a vertex
-/// beyond the reach is undone as always.
+/// removing it keeps that corner in the faces around; and a listed face touching the margin at
+/// a vertex goes with that vertex's whole fan even where faces of the fan reach beyond. Either
+/// way no vertex beyond the reach is lost: a removal that would lose one is put back ([`peel`]).
 pub fn trim_fringe(
     crown: &TriMesh,
     src: &[u32],
@@ -231,7 +232,7 @@ pub fn trim_fringe(
                 }
             }
             for faces in fan_faces {
-                if faces.iter().all(|&f| is_fringe[f]) {
+                if listed_apex || faces.iter().all(|&f| is_fringe[f]) {
                     for f in faces {
                         remove[f] = true;
                     }
@@ -239,50 +240,9 @@ pub fn trim_fringe(
             }
         }
         report.rounds += 1;
-        let before = mesh.triangles.len();
-        let kept: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .filter(|&(f, _)| !remove[f])
-            .map(|(_, t)| *t)
-            .collect();
-        if kept.len() == before {
+        let Some((rep, next, removed)) = peel(&mesh, &map, &mut remove, dist_in, reach) else {
             break;
-        }
-        let removed = before - kept.len();
-        let cut = TriMesh::new(mesh.positions.clone(), kept);
-        let (rep, rep_src, _) = repair_open_surface(
-            &cut,
-            &RepairOptions {
-                max_hole_fraction: 0.0,
-            },
-        );
-        if boundary_loops(&rep).len() != 1 {
-            break;
-        }
-        let next: Vec<u32> = rep_src
-            .iter()
-            .map(|&s| {
-                if s == u32::MAX {
-                    u32::MAX
-                } else {
-                    map[s as usize]
-                }
-            })
-            .collect();
-        // The repair drops pieces the peeling cut off; should one reach beyond the fringe,
-        // this round is not kept (nothing beyond the reach is ever removed).
-        let mut still = vec![false; dist_in.len()];
-        for &s in next.iter().filter(|&&s| s != u32::MAX) {
-            still[s as usize] = true;
-        }
-        if map
-            .iter()
-            .any(|&s| s != u32::MAX && !still[s as usize] && dist_in[s as usize] > reach)
-        {
-            break;
-        }
+        };
         report.faces += removed;
         map = next;
         mesh = rep;
@@ -304,6 +264,125 @@ pub fn trim_fringe(
         }
     }
     Some((mesh, map, report))
+}
+
+/// Times [`peel`] puts back the marked faces at a pinch and tries again.
+const PEEL_RETRIES: usize = 4;
+
+/// Removes the faces marked in `remove` from `mesh` (whose vertices' input indices are `map`)
+/// and repairs what is left. The result must stay one disk losing nothing beyond the reach:
+/// where the removal leaves several boundary loops, or the repair drops a piece cut off by it
+/// that holds a vertex beyond the reach, the marked faces touching the culprit vertices (those
+/// of the extra loops, or of the dropped pieces) are kept instead and the rest is tried again,
+/// so that one pinching face does not hold back the whole round. Returns the trimmed crown, its
+/// vertices' input indices and the number of faces removed; `None` when nothing can go.
+fn peel(
+    mesh: &TriMesh,
+    map: &[u32],
+    remove: &mut [bool],
+    dist_in: &[f64],
+    reach: f64,
+) -> Option<(TriMesh, Vec<u32>, usize)> {
+    let n = mesh.positions.len();
+    for _ in 0..PEEL_RETRIES {
+        let kept: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .zip(remove.iter())
+            .filter(|&(_, &r)| !r)
+            .map(|(t, _)| *t)
+            .collect();
+        let removed = mesh.triangles.len() - kept.len();
+        if removed == 0 {
+            return None;
+        }
+        let cut = TriMesh::new(mesh.positions.clone(), kept);
+        let (rep, rep_src, _) = repair_open_surface(
+            &cut,
+            &RepairOptions {
+                max_hole_fraction: 0.0,
+            },
+        );
+        let mut present = vec![false; n];
+        for &s in rep_src.iter().filter(|&&s| s != u32::MAX) {
+            present[s as usize] = true;
+        }
+        let far = |v: usize| map[v] != u32::MAX && dist_in[map[v] as usize] > reach;
+        let mut used = vec![false; n];
+        for t in &mesh.triangles {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        let mut culprit = vec![false; n];
+        if (0..n).any(|v| used[v] && !present[v] && far(v)) {
+            // The corners of every kept face the repair dropped (the pieces the removal cut
+            // off), and the far vertices whose faces all went.
+            let key = |t: [u32; 3]| {
+                let mut k = t;
+                k.sort_unstable();
+                k
+            };
+            let mut left: Vec<[u32; 3]> = rep
+                .triangles
+                .iter()
+                .map(|t| key(t.map(|v| rep_src[v as usize])))
+                .collect();
+            left.sort_unstable();
+            for t in &cut.triangles {
+                if left.binary_search(&key(*t)).is_err() {
+                    for &v in t {
+                        culprit[v as usize] = true;
+                    }
+                }
+            }
+            for (v, c) in culprit.iter_mut().enumerate() {
+                *c |= used[v] && !present[v] && far(v);
+            }
+        }
+        let loops = boundary_loops(&rep);
+        if loops.len() > 1 {
+            let longest = (0..loops.len())
+                .max_by_key(|&i| (loops[i].len(), Reverse(i)))
+                .unwrap_or(0);
+            for (i, lp) in loops.iter().enumerate() {
+                if i != longest {
+                    for &v in lp {
+                        if let Some(&s) = rep_src.get(v as usize).filter(|&&s| s != u32::MAX) {
+                            culprit[s as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+        if !culprit.iter().any(|&c| c) {
+            if loops.len() != 1 {
+                return None;
+            }
+            let next = rep_src
+                .iter()
+                .map(|&s| {
+                    if s == u32::MAX {
+                        u32::MAX
+                    } else {
+                        map[s as usize]
+                    }
+                })
+                .collect();
+            return Some((rep, next, removed));
+        }
+        let mut restored = 0;
+        for (t, r) in mesh.triangles.iter().zip(remove.iter_mut()) {
+            if *r && t.iter().any(|&v| culprit[v as usize]) {
+                *r = false;
+                restored += 1;
+            }
+        }
+        if restored == 0 {
+            return None;
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -334,5 +413,70 @@ mod tests {
         // The apex is now on the margin, at its position.
         let apex = map.iter().position(|&s| s == 0).unwrap();
         assert_eq!(trimmed.positions[apex], crown.positions[0]);
+    }
+
+    /// A disk of two rings round an apex (apex 0, ring 1..=8 at 0.5 mm, margin 9..=16 at
+    /// 1 mm) with a tab face on the margin edge (9, 10) holding vertex 17; faces 0..8 the
+    /// apex fan, then the annulus, then the tab.
+    fn ringed_disk() -> TriMesh {
+        let mut positions = vec![DVec3::ZERO];
+        for r in [0.5, 1.0] {
+            positions.extend((0..8).map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / 8.0;
+                DVec3::new(r * a.cos(), r * a.sin(), 0.0)
+            }));
+        }
+        positions.push(DVec3::new(1.3, 0.5, 0.0));
+        let mut triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
+        for k in 0..8u32 {
+            let (a, b) = (1 + k, 1 + (k + 1) % 8);
+            let (c, d) = (9 + k, 9 + (k + 1) % 8);
+            triangles.push([a, c, d]);
+            triangles.push([a, d, b]);
+        }
+        triangles.push([10, 9, 17]);
+        TriMesh::new(positions, triangles)
+    }
+
+    /// A removal that would cut the crown apart, or punch a hole into it, is put back while
+    /// the rest of the round goes: removing the annulus face under the tab drops the tab's
+    /// vertex beyond the reach, and removing an apex face opens a second loop; both faces are
+    /// kept and the harmless margin face elsewhere goes.
+    #[test]
+    fn a_removal_that_pinches_is_put_back_and_the_rest_goes() {
+        let crown = ringed_disk();
+        let map: Vec<u32> = (0..18).collect();
+        // The tab's vertex stands for crown beyond the reach that hangs on the removed face.
+        let mut dist_in = vec![0.0; 18];
+        dist_in[17] = 5.0;
+        let under_tab = crown
+            .triangles
+            .iter()
+            .position(|t| t.contains(&9) && t.contains(&10) && !t.contains(&17))
+            .unwrap();
+        let harmless = crown
+            .triangles
+            .iter()
+            .position(|t| t.contains(&13) && t.contains(&14))
+            .unwrap();
+        let mut remove = vec![false; crown.triangles.len()];
+        for f in [0, under_tab, harmless] {
+            remove[f] = true;
+        }
+        let (rep, next, removed) = peel(&crown, &map, &mut remove, &dist_in, 0.3).unwrap();
+        assert_eq!(removed, 1);
+        assert!(remove[harmless] && !remove[0] && !remove[under_tab]);
+        assert_eq!(rep.triangles.len(), crown.triangles.len() - 1);
+        assert_eq!(boundary_loops(&rep).len(), 1);
+        assert!(next.contains(&17));
+        // Alone, each of the two is refused.
+        for f in [0, under_tab] {
+            let mut only = vec![false; crown.triangles.len()];
+            only[f] = true;
+            assert!(
+                peel(&crown, &map, &mut only, &dist_in, 0.3).is_none(),
+                "face {f}"
+            );
+        }
     }
 }
