@@ -2,11 +2,13 @@
 //! IOS as target; for each IOS point `y ∈ Y_i` the closest CBCT point `Corr(y)` of the same tooth,
 //! residual `(R(Corr(y)) − y) · n_Corr(y)` with the CBCT normal.
 
+use super::correspondence::NearestMemo;
 use super::icp::{Normal7, Pair, step_about, weights};
 use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
 use glam::DVec3;
 use std::collections::BTreeMap;
+use std::sync::Mutex;
 
 /// Result of the coarse stage.
 pub(crate) struct CoarseResult {
@@ -20,18 +22,27 @@ pub(crate) struct CoarseResult {
 
 /// Builds the eq. (2) pairs in the IOS frame for the current `t` (CBCT → IOS), tooth by tooth
 /// in FDI order (the teeth's correspondences on several threads, concatenated in that order).
-fn pairs(teeth: &BTreeMap<u8, ToothData>, t: &Rigid, level: Level, o: &StageOptions) -> Vec<Pair> {
+/// `memos` holds per tooth, in FDI order, what its points remember of their last nearest-vertex
+/// search ([`NearestMemo`]: only searches are saved, the pairs are the same).
+fn pairs(
+    teeth: &BTreeMap<u8, ToothData>,
+    t: &Rigid,
+    level: Level,
+    o: &StageOptions,
+    memos: &[Mutex<Vec<NearestMemo>>],
+) -> Vec<Pair> {
     let inv = t.inverse();
-    let ds: Vec<&ToothData> = teeth.values().collect();
-    let per_tooth = crate::par::map_ordered(&ds, |d| {
-        d.ios_indices(level)
-            .iter()
-            .map(|&k| {
+    let on_faces = o.correspondence == Correspondence::ClosestPoint;
+    let ds: Vec<(&ToothData, &Mutex<Vec<NearestMemo>>)> = teeth.values().zip(memos).collect();
+    let per_tooth = crate::par::map_ordered(&ds, |(d, memo)| {
+        let mut memo = memo.lock().unwrap_or_else(|e| e.into_inner());
+        let idx = d.ios_indices(level);
+        memo.resize(idx.len(), NearestMemo::default());
+        idx.iter()
+            .zip(memo.iter_mut())
+            .map(|(&k, memo)| {
                 let y = d.ios_points[k];
-                let sp = match o.correspondence {
-                    Correspondence::ClosestVertex => d.cbct.closest_vertex(inv.apply(y)),
-                    Correspondence::ClosestPoint => d.cbct.closest_point(inv.apply(y)),
-                };
+                let sp = d.cbct.pair_remembered(inv.apply(y), on_faces, memo);
                 Pair {
                     p: t.apply(sp.point),
                     q: y,
@@ -66,11 +77,13 @@ pub(crate) fn coarse(
         .flat_map(|d| d.ios_points.iter())
         .fold(0.0f64, |r, p| r.max((*p - center).length()));
     let mut stats = StageStats::default();
+    let memos: Vec<Mutex<Vec<NearestMemo>>> =
+        teeth.keys().map(|_| Mutex::new(Vec::new())).collect();
     for pass in passes(o) {
         let mut prev_rms = f64::INFINITY;
         let mut converged = false;
         for _ in 0..pass.cap {
-            let pr = pairs(teeth, &t, pass.level, o);
+            let pr = pairs(teeth, &t, pass.level, o, &memos);
             let w = weights(&pr, offset, &o.weights);
             let mut ne = Normal7::new();
             ne.add_pairs(&pr, &w, center, offset);

@@ -10,6 +10,7 @@
 //! solution (`rotation_prior`). `smooth → ∞` gives one rigid transform (eq. 2); `smooth = 0`
 //! gives independent per-tooth fits.
 
+use super::correspondence::NearestMemo;
 use super::fine::group_pairs;
 use super::icp::{Normal7, step_about, weights};
 use super::{DriftOptions, StageOptions, StageStats, ToothData, passes};
@@ -75,6 +76,11 @@ pub(crate) fn fine_smooth(
         .fold(0.0, f64::max);
     let mut iterations = 0usize;
     let mut converged = false;
+    // Each tooth's nearest-vertex memos, touched by one thread at a time.
+    let memos: Vec<(u8, std::sync::Mutex<Vec<NearestMemo>>)> = order
+        .iter()
+        .map(|&f| (f, std::sync::Mutex::new(Vec::new())))
+        .collect();
     for pass in passes(o) {
         let mut phase_converged = false;
         for _ in 0..pass.cap {
@@ -85,7 +91,8 @@ pub(crate) fn fine_smooth(
             let mut a = DMatrix::<f64>::zeros(dim, dim);
             let mut g = DVector::<f64>::zeros(dim);
             // The teeth's correspondences on several threads; everything summed in arch order.
-            let all_pairs = crate::par::map_ordered(order, |f| {
+            let all_pairs = crate::par::map_ordered(&memos, |(f, memo)| {
+                let mut memo = memo.lock().unwrap_or_else(|e| e.into_inner());
                 group_pairs(
                     teeth,
                     std::slice::from_ref(f),
@@ -93,6 +100,7 @@ pub(crate) fn fine_smooth(
                     pass.level,
                     o,
                     o.source_normals,
+                    std::slice::from_mut(&mut *memo),
                 )
             });
             for ((k, f), pr) in order.iter().enumerate().zip(&all_pairs) {

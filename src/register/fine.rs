@@ -7,6 +7,7 @@
 //! Everything runs in the CBCT frame: the IOS points are first mapped by the coarse transform's
 //! inverse; a tooth's correction `F` then gives CBCT → IOS as `T ∘ F⁻¹`.
 
+use super::correspondence::NearestMemo;
 use super::icp::{Normal7, Pair, step_about, weights};
 use super::{Correspondence, Level, StageOptions, StageStats, ToothData, passes};
 use crate::Rigid;
@@ -15,7 +16,9 @@ use std::collections::BTreeMap;
 
 /// Pairs of eq. (3) for the teeth of `group`: source = IOS points moved by `t⁻¹` then by the
 /// tooth's correction `f`, target = that tooth's CBCT surface, normal = the IOS normal `n_y`
-/// (paper) or the CBCT normal.
+/// (paper) or the CBCT normal. `memos[i]` holds what the points of `group[i]` remember of their
+/// last nearest-vertex search (see [`NearestMemo`]; any memo gives the search's answer, so one
+/// kept across iterations only saves searches).
 pub(crate) fn group_pairs(
     teeth: &BTreeMap<u8, ToothData>,
     group: &[u8],
@@ -23,18 +26,19 @@ pub(crate) fn group_pairs(
     level: Level,
     o: &StageOptions,
     source_normals: bool,
+    memos: &mut [Vec<NearestMemo>],
 ) -> Vec<Pair> {
     let mut out = Vec::new();
-    for fdi in group {
+    for (fdi, memo) in group.iter().zip(memos) {
         let d = &teeth[fdi];
         let m = ios_to_cbct[fdi];
-        for &k in d.ios_indices(level) {
+        let idx = d.ios_indices(level);
+        memo.resize(idx.len(), NearestMemo::default());
+        let on_faces = o.correspondence == Correspondence::ClosestPoint;
+        for (&k, memo) in idx.iter().zip(memo.iter_mut()) {
             let z = m.apply(d.ios_points[k]);
             let nz = m.apply_vector(d.ios_normals[k]);
-            let sp = match o.correspondence {
-                Correspondence::ClosestVertex => d.cbct.closest_vertex(z),
-                Correspondence::ClosestPoint => d.cbct.closest_point(z),
-            };
+            let sp = d.cbct.pair_remembered(z, on_faces, memo);
             let (n, n_other) = if source_normals {
                 (nz, sp.normal)
             } else {
@@ -72,6 +76,7 @@ fn register_group(
         .map(|f| ios_to_cbct[f].apply(teeth[f].ios_centroid).distance(center) + teeth[f].ios_radius)
         .fold(0.0, f64::max);
     let mut stats = StageStats::default();
+    let mut memos = vec![Vec::new(); group.len()];
     for pass in passes(o) {
         let mut prev_rms = f64::INFINITY;
         let mut converged = false;
@@ -79,7 +84,15 @@ fn register_group(
             for f in group {
                 local.insert(*f, g.compose(&ios_to_cbct[f]));
             }
-            let pr = group_pairs(teeth, group, &local, pass.level, o, o.source_normals);
+            let pr = group_pairs(
+                teeth,
+                group,
+                &local,
+                pass.level,
+                o,
+                o.source_normals,
+                &mut memos,
+            );
             let w = weights(&pr, offset, &o.weights);
             let mut ne = Normal7::new();
             // The offset models the CBCT surface displaced along its normal: with IOS as source

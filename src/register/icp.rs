@@ -190,17 +190,39 @@ impl Normal7 {
 
     /// Adds the pairs with their weights, linearised about `center`, for current offset `offset`.
     pub fn add_pairs(&mut self, pairs: &[Pair], w: &[f64], center: DVec3, offset: f64) {
+        // Only the upper triangle is summed (`a_i a_j = a_j a_i` bit for bit) and mirrored at
+        // the end; every entry gets the same terms in the same order as `A += w a aᵀ` would
+        // give it.
+        let mut upper = [[0.0f64; 7]; 7];
+        for (i, row) in upper.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate().skip(i) {
+                *x = self.a[(i, j)];
+            }
+        }
         for (p, &wk) in pairs.iter().zip(w) {
             if wk <= 0.0 {
                 continue;
             }
             let c = (p.p - center).cross(p.n);
-            let a = SVector::<f64, 7>::from([c.x, c.y, c.z, p.n.x, p.n.y, p.n.z, -1.0]);
+            let a = [c.x, c.y, c.z, p.n.x, p.n.y, p.n.z, -1.0];
             let r = p.residual() - offset;
-            self.a += a * a.transpose() * wk;
-            self.g += a * (wk * r);
+            for (i, row) in upper.iter_mut().enumerate() {
+                for (j, x) in row.iter_mut().enumerate().skip(i) {
+                    *x += a[i] * a[j] * wk;
+                }
+            }
+            let wr = wk * r;
+            for (g, ai) in self.g.iter_mut().zip(a) {
+                *g += ai * wr;
+            }
             self.rr += wk * r * r;
             self.wsum += wk;
+        }
+        for (i, row) in upper.iter().enumerate() {
+            for (j, &x) in row.iter().enumerate().skip(i) {
+                self.a[(i, j)] = x;
+                self.a[(j, i)] = x;
+            }
         }
     }
 
@@ -279,6 +301,57 @@ impl Convergence {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The normal equations summed by upper triangle are bit for bit those of `A += w a aᵀ`,
+    /// `g += a (w r)`, on pairs with weights of every size (and zero ones skipped), added onto a
+    /// system that already holds terms.
+    #[test]
+    fn upper_triangle_sums_are_the_full_products() {
+        let mut state = 12345u64;
+        let mut unit = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let pairs: Vec<Pair> = (0..500)
+            .map(|_| Pair {
+                p: DVec3::new(unit(), unit(), unit()) * 40.0,
+                q: DVec3::new(unit(), unit(), unit()) * 40.0,
+                n: DVec3::new(unit(), unit(), unit()).normalize(),
+                n_other: DVec3::ZERO,
+            })
+            .collect();
+        let w: Vec<f64> = (0..500)
+            .map(|k| {
+                if k % 7 == 0 {
+                    0.0
+                } else {
+                    (unit() + 0.5) * 10f64.powi(k % 5 - 2)
+                }
+            })
+            .collect();
+        let (center, offset) = (DVec3::new(1.5, -2.0, 3.0), 0.125);
+        let mut fast = Normal7::new();
+        fast.add_pairs(&pairs[..100], &w[..100], center, offset);
+        fast.add_pairs(&pairs[100..], &w[100..], center, offset);
+        let mut full = Normal7::new();
+        for (p, &wk) in pairs.iter().zip(&w) {
+            if wk <= 0.0 {
+                continue;
+            }
+            let c = (p.p - center).cross(p.n);
+            let a = SVector::<f64, 7>::from([c.x, c.y, c.z, p.n.x, p.n.y, p.n.z, -1.0]);
+            let r = p.residual() - offset;
+            full.a += a * a.transpose() * wk;
+            full.g += a * (wk * r);
+            full.rr += wk * r * r;
+            full.wsum += wk;
+        }
+        assert_eq!(fast.a, full.a);
+        assert_eq!(fast.g, full.g);
+        assert_eq!((fast.rr, fast.wsum), (full.rr, full.wsum));
+    }
 
     #[test]
     fn one_step_recovers_a_small_translation_on_three_planes() {
