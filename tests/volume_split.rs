@@ -325,7 +325,7 @@ fn touching_teeth_are_split_at_their_contacts() {
         .find(|l| l.starts_with("tooth 44"));
     let line = line.unwrap();
     assert!(
-        line.contains("lay beyond the narrowest cut to tooth 43"),
+        line.contains("10.2% of its flood") && line.contains("most to tooth 43"),
         "{line}"
     );
     let json: serde_json::Value = serde_json::from_str(&split.to_json()).unwrap();

@@ -295,7 +295,7 @@ impl ToothSplit {
     /// Share of the voxels its flood gave the tooth that were handed to a neighbour (beyond the
     /// narrowest cut to it).
     pub fn handed_over_share(&self) -> f64 {
-        let flooded = self.voxels + self.handed_over_voxels - self.received_voxels;
+        let flooded = (self.voxels + self.handed_over_voxels).saturating_sub(self.received_voxels);
         self.handed_over_voxels as f64 / flooded.max(1) as f64
     }
 

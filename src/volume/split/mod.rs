@@ -208,8 +208,8 @@ fn handed_note(t: &ToothSplit) -> String {
     let mut s = String::new();
     if let Some(w) = t.handed_over_to {
         s += &format!(
-            "; {} voxels ({:.1}% of its flood) lay beyond the narrowest cut to tooth {w} and \
-             were handed to it",
+            "; {} voxels ({:.1}% of its flood) lay beyond the narrowest cut to a neighbour and \
+             were handed to it (most to tooth {w})",
             t.handed_over_voxels,
             100.0 * t.handed_over_share()
         );
