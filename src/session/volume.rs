@@ -81,9 +81,11 @@ impl Session {
                     }
                     None => format!(
                         "CBCT tooth split from the per-jaw teeth mask: {:.1}% of its voxels \
-                         contested, {:.1}% beyond the narrowest cut to a neighbour",
+                         contested, {:.1}% beyond the narrowest cut to a neighbour ({:.1}% of \
+                         its flood's handed over to a neighbour beyond it)",
                         100.0 * t.contested_share(),
-                        100.0 * t.overrun_share()
+                        100.0 * t.overrun_share(),
+                        100.0 * t.handed_over_share()
                     ),
                 };
                 notes.insert(*fdi, line);

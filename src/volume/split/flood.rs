@@ -260,6 +260,14 @@ pub struct ToothSplit {
     pub overrun_voxels: usize,
     /// The neighbour it overran most, if any.
     pub overrun_into: Option<u8>,
+    /// Voxels its flood took beyond the narrowest cut to a neighbour that were handed to that
+    /// neighbour (see `neck::hand_over`; not counted in `voxels`).
+    pub handed_over_voxels: usize,
+    /// The neighbour handed most of them, if any.
+    pub handed_over_to: Option<u8>,
+    /// Voxels handed to it by neighbours whose floods ran beyond the narrowest cut into it
+    /// (counted in `voxels`).
+    pub received_voxels: usize,
 }
 
 impl ToothSplit {
@@ -282,6 +290,13 @@ impl ToothSplit {
     /// boundaries run through the necks where the mask joins the teeth).
     pub fn overrun_share(&self) -> f64 {
         self.overrun_voxels as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Share of the voxels its flood gave the tooth that were handed to a neighbour (beyond the
+    /// narrowest cut to it).
+    pub fn handed_over_share(&self) -> f64 {
+        let flooded = (self.voxels + self.handed_over_voxels).saturating_sub(self.received_voxels);
+        self.handed_over_voxels as f64 / flooded.max(1) as f64
     }
 
     /// Share of the tooth's boundary drawn by the split (faces to another tooth's voxels)
