@@ -182,12 +182,16 @@ pub struct NearestMemo {
 impl Default for NearestMemo {
     fn default() -> Self {
         NearestMemo {
-            at: DVec3::ZERO,
+            at: DVec3::NAN,
             vertex: 0,
             slack: -1.0,
         }
     }
 }
+
+/// A point that moved less than this (mm) since its last search searches for the gap to its
+/// second-nearest vertex too (dearer than a plain search, so only once its steps are small).
+const SETTLED_MM: f64 = 0.02;
 
 /// Absolute margin (mm) taken off a memo's slack, far above the rounding of the distances.
 const MEMO_MARGIN_MM: f64 = 1e-9;
@@ -197,10 +201,28 @@ impl SurfaceIndex {
     /// a little from one iteration to the next: a search also finds the second-nearest vertex
     /// and remembers half the gap between the two distances; while the point has moved less
     /// than that since, every other vertex is still farther than the remembered one (triangle
-    /// inequality), so it is returned without searching. The answer is always the search's.
+    /// inequality), so it is returned without searching. A point still moving far searches
+    /// plainly and remembers only where it was. The answer is always the search's.
     fn nearest_remembered(&self, q: DVec3, memo: &mut NearestMemo) -> usize {
-        if q.distance(memo.at) < memo.slack {
+        let moved = q.distance(memo.at);
+        if moved < memo.slack {
             return memo.vertex as usize;
+        }
+        if moved.is_nan() || moved >= SETTLED_MM {
+            // Still moving far (or never searched): the plain search, as without a memo; the
+            // gap is worth finding only once the steps have become small.
+            let v = self
+                .tree
+                .query(&q.to_array())
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute()
+                .item as usize;
+            *memo = NearestMemo {
+                at: q,
+                vertex: v as u32,
+                slack: -1.0,
+            };
+            return v;
         }
         let two = std::num::NonZeroUsize::new(2).expect("two");
         let r = self
@@ -363,7 +385,7 @@ mod tests {
                 }
             }
         }
-        // Measured: 5 180 of the 6 000 steps answered from the memo.
-        assert!(reused * 10 > steps * 8, "{reused} of {steps}");
+        // Measured: 4 575 of the 6 000 steps answered from the memo.
+        assert!(reused * 10 > steps * 7, "{reused} of {steps}");
     }
 }
