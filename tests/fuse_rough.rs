@@ -27,7 +27,7 @@ const FOREIGN: Bounds = Bounds {
     trimmed_share: 0.005,
 };
 /// Rough phantom exports (much rougher than the foreign jaws: 4x their crossing crown pairs per
-/// crown on dense exports): measured at most 29 added pairs per tooth, at most 6.8 % trimmed
+/// crown on dense exports): measured at most 28 added pairs per tooth, at most 6.8 % trimmed
 /// (coarse crowns of a few hundred vertices).
 const ROUGH: Bounds = Bounds {
     added_pairs: 30,

@@ -284,6 +284,12 @@ fn peel(
     reach: f64,
 ) -> Option<(TriMesh, Vec<u32>, usize)> {
     let n = mesh.positions.len();
+    let mut used = vec![false; n];
+    for t in &mesh.triangles {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
     for _ in 0..PEEL_RETRIES {
         let kept: Vec<[u32; 3]> = mesh
             .triangles
@@ -308,12 +314,6 @@ fn peel(
             present[s as usize] = true;
         }
         let far = |v: usize| map[v] != u32::MAX && dist_in[map[v] as usize] > reach;
-        let mut used = vec![false; n];
-        for t in &mesh.triangles {
-            for &v in t {
-                used[v as usize] = true;
-            }
-        }
         let mut culprit = vec![false; n];
         if (0..n).any(|v| used[v] && !present[v] && far(v)) {
             // The corners of every kept face the repair dropped (the pieces the removal cut

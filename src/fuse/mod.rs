@@ -2,6 +2,7 @@
 //! ([`crate::cut`]) and stitching ([`crate::stitch`]) into one watertight mesh; per jaw, all
 //! fused teeth in one mesh with per-vertex FDI labels and sources.
 
+mod assembly;
 mod band_crossings;
 mod band_opt;
 pub mod fringe;
@@ -10,9 +11,10 @@ pub mod quality;
 mod tooth;
 pub mod untangle;
 
+pub use assembly::stitch_tooth;
 pub use jaw::{CutJaw, FusedJaw, ToothTransforms, cut_jaw, fuse_jaw, ios_crowns, stitch_jaw};
 pub use quality::ToothQuality;
-pub use tooth::{CutTooth, FusedTooth, cut_tooth, fuse_tooth, stitch_tooth};
+pub use tooth::{CutTooth, FusedTooth, cut_tooth, fuse_tooth};
 
 use crate::cut::{CutMethod, CutOptions};
 use crate::stitch::interp::InterpOptions;

@@ -109,6 +109,15 @@ impl SurfaceIndex {
         }
     }
 
+    /// Index of the vertex nearest to `q` (the k-d tree's answer, ties as it breaks them).
+    fn nearest_vertex(&self, q: DVec3) -> usize {
+        self.tree
+            .query(&q.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute()
+            .item as usize
+    }
+
     /// Indices of the vertices at squared distance below `r2` from `q` (`(q - v)·(q - v) < r2`
     /// exactly as glam computes it), in no particular order.
     pub fn vertices_within(&self, q: DVec3, r2: f64) -> impl Iterator<Item = usize> + '_ {
@@ -129,13 +138,7 @@ impl SurfaceIndex {
     /// holds for queries within about an edge length of a well-shaped surface (ICP pairs); five
     /// times faster than searching the rings of the six nearest vertices.
     pub fn closest_point(&self, q: DVec3) -> SurfacePoint {
-        let v = self
-            .tree
-            .query(&q.to_array())
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute()
-            .item as usize;
-        self.closest_point_around(q, v)
+        self.closest_point_around(q, self.nearest_vertex(q))
     }
 
     /// [`Self::closest_point`] given `v`, the vertex nearest to `q`.
@@ -211,12 +214,7 @@ impl SurfaceIndex {
         if moved.is_nan() || moved >= SETTLED_MM {
             // Still moving far (or never searched): the plain search, as without a memo; the
             // gap is worth finding only once the steps have become small.
-            let v = self
-                .tree
-                .query(&q.to_array())
-                .nearest_one::<SquaredEuclidean<f64>>()
-                .execute()
-                .item as usize;
+            let v = self.nearest_vertex(q);
             *memo = NearestMemo {
                 at: q,
                 vertex: v as u32,
@@ -236,14 +234,7 @@ impl SurfaceIndex {
                 0.5 * (b.distance.sqrt() - a.distance.sqrt()) - MEMO_MARGIN_MM,
             ),
             // A tie (or a one-vertex mesh): the plain search decides, nothing is remembered.
-            _ => (
-                self.tree
-                    .query(&q.to_array())
-                    .nearest_one::<SquaredEuclidean<f64>>()
-                    .execute()
-                    .item as usize,
-                -1.0,
-            ),
+            _ => (self.nearest_vertex(q), -1.0),
         };
         *memo = NearestMemo {
             at: q,

@@ -340,11 +340,9 @@ mod tests {
         (JawMask::from_volume(&v, 4).unwrap(), truth)
     }
 
-    #[test]
-    fn a_flood_through_a_contact_into_the_neighbour_is_beyond_the_narrowest_cut() {
-        let (m, truth) = touching();
-        // Crown seeds: the top of 41, and only the far end of 42's top (its crown is reached
-        // from 41 through the contact before 42's own paths get there).
+    /// Crown seeds on [`touching`]: the whole top of 41, and only the far end of 42's top (42's
+    /// crown is reached from 41 through the contact before 42's own paths get there).
+    fn seeds_through_contact(m: &JawMask) -> Vec<u8> {
         let mut seeds = vec![0u8; m.inside.len()];
         for j in 1..=10 {
             for i in 1..=11 {
@@ -354,6 +352,13 @@ mod tests {
                 seeds[m.idx(i, j, 22)] = 42;
             }
         }
+        seeds
+    }
+
+    #[test]
+    fn a_flood_through_a_contact_into_the_neighbour_is_beyond_the_narrowest_cut() {
+        let (m, truth) = touching();
+        let seeds = seeds_through_contact(&m);
         let growth = vec![Growth::plain(step_costs(&m, DVec3::Z, 3.0)); 256];
         let f = flood(&m, &growth, &seeds);
         let none = vec![false; m.inside.len()];
@@ -408,16 +413,7 @@ mod tests {
     #[test]
     fn voxels_beyond_the_narrowest_cut_are_handed_to_the_neighbour() {
         let (m, truth) = touching();
-        // 41 seeded on all its top, 42 only at its far end: 41's flood crosses the contact.
-        let mut seeds = vec![0u8; m.inside.len()];
-        for j in 1..=10 {
-            for i in 1..=11 {
-                seeds[m.idx(i, j, 22)] = 41;
-            }
-            for i in 23..=26 {
-                seeds[m.idx(i, j, 22)] = 42;
-            }
-        }
+        let seeds = seeds_through_contact(&m);
         let growth = vec![Growth::plain(step_costs(&m, DVec3::Z, 3.0)); 256];
         let mut best = flood(&m, &growth, &seeds).best;
         let wrong = |best: &[u8]| {
