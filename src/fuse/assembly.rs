@@ -82,6 +82,13 @@ fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) -> Vec<u32>
         .collect()
 }
 
+/// Band builds per tooth at most (the first and the rebuilds after trimming the fringe). Each
+/// rebuild lays the band out anew on a changed margin, so the crossings left do not fall steadily
+/// from one attempt to the next: on rough phantom exports some teeth still crossed after six
+/// attempts are clear by the tenth. Only such teeth pay for the later attempts (the foreign
+/// jaws' teeth take at most four).
+const MAX_ATTEMPTS: usize = 10;
+
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
@@ -102,7 +109,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     // between it and the margin) and the band is built again on the new margin. Of the attempts,
     // the one with the fewest crossings left is kept (the earliest, least trimmed, on a tie).
     let mut best: Option<(Assembled, super::fringe::FringeTrim)> = None;
-    for attempt in 1..=6 {
+    for attempt in 1..=MAX_ATTEMPTS {
         let a = assemble(ct, &side, opts)?;
         let hits = if crossings_left(&a) > 0 {
             crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
@@ -115,7 +122,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         {
             best = Some((a, trimmed));
         }
-        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == 6 {
+        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
             break;
         }
         // Only where nothing within the reach can go: a crossed face whose apex lies beyond it.
