@@ -275,7 +275,7 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
 // the margin) or dropped (label-noise islands apart from the crown). Measured: the coarse crowns
 // lose up to ~7 % of their vertices to the fringe trim (the 0.5 % of the clean contract is not
 // met there) and some teeth keep crossing pairs with a band face (the library reports them; the
-// Rust test fuse_rough bounds them at 30 per tooth).
+// Rust test fuse_rough bounds them at 16 per tooth).
 TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
   const CrownLimits rough{0.08, 30, true};
   size_t jaws = 0, teeth = 0, crossings = 0, trimmedTeeth = 0;

@@ -222,16 +222,28 @@ impl SurfaceIndex {
             };
             return v;
         }
+        // The two nearest within a radius just over the remembered vertex's distance plus two
+        // settled steps: the nearest lies inside (the remembered vertex does), and when the
+        // second does not, the gap is at least the radius's excess, which covers the next
+        // settled steps; the search prunes by the radius from its start.
         let two = std::num::NonZeroUsize::new(2).expect("two");
+        let radius = q.distance(self.mesh.positions[memo.vertex as usize]) + 2.0 * SETTLED_MM;
         let r = self
             .tree
             .query(&q.to_array())
             .nearest_n::<SquaredEuclidean<f64>>(two)
+            .within(radius * radius)
             .execute();
         let (v, slack) = match r.as_slice() {
             [a, b] if b.distance > a.distance => (
                 a.item as usize,
                 0.5 * (b.distance.sqrt() - a.distance.sqrt()) - MEMO_MARGIN_MM,
+            ),
+            // Every other vertex lies farther than the radius (the search's distances can be
+            // off in their last bits: the margin covers that).
+            [a] => (
+                a.item as usize,
+                0.5 * (radius - a.distance.sqrt()) - MEMO_MARGIN_MM,
             ),
             // A tie (or a one-vertex mesh): the plain search decides, nothing is remembered.
             _ => (self.nearest_vertex(q), -1.0),
@@ -376,7 +388,9 @@ mod tests {
                 }
             }
         }
-        // Measured: 4 575 of the 6 000 steps answered from the memo.
-        assert!(reused * 10 > steps * 7, "{reused} of {steps}");
+        // Measured: 4 178 of the 6 000 steps answered from the memo (4 575 when the gap was
+        // searched without a radius: the radius caps the remembered slack on this sparse
+        // lattice, where the second-nearest vertex often lies beyond it).
+        assert!(reused * 100 > steps * 67, "{reused} of {steps}");
     }
 }
