@@ -174,11 +174,12 @@ pub fn trim_fringe(
         };
         // Of a crossing pair one face has to go: the one nearer the margin (so the least of the
         // crown goes), or the only one in the fringe.
+        // Vertices that are no input vertex (a filled hole's) have no distance: they do not count.
         let depth = |f: u32| {
             mesh.triangles[f as usize]
                 .iter()
-                .map(|&v| dist_in[map[v as usize] as usize])
-                .fold(f64::INFINITY, f64::min)
+                .filter_map(|&v| dist_in.get(map[v as usize] as usize))
+                .fold(f64::INFINITY, |a, &d| a.min(d))
         };
         let mut bad = vec![false; mesh.triangles.len()];
         for (f, g) in crossing_pairs(&mesh, &fringe) {
@@ -478,5 +479,36 @@ mod tests {
                 "face {f}"
             );
         }
+    }
+
+    /// A flat fan crown folded at the margin (vertex 2 swung past vertex 3, so the faces on
+    /// either side of the edge 0–2 overlap) whose apex is no input vertex (a filled hole's):
+    /// both folded faces are listed, the apex has no distance from the margin, and the trim
+    /// neither fails on it nor loses it; one of the two faces goes and the crown stays a disk.
+    #[test]
+    fn a_fold_at_a_vertex_that_is_no_input_vertex_is_trimmed() {
+        let mut positions = vec![DVec3::ZERO];
+        positions.extend((0..8).map(|k| {
+            let deg = if k == 1 { 100.0f64 } else { 45.0 * k as f64 };
+            let a = deg.to_radians();
+            DVec3::new(a.cos(), a.sin(), 0.0)
+        }));
+        let triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
+        let crown = TriMesh::new(positions, triangles);
+        assert!(!crossing_pairs(&crown, &[0, 1]).is_empty());
+        let mut src: Vec<u32> = (0..9).collect();
+        src[0] = u32::MAX;
+        let dist_in = vec![0.0; 9];
+        let (trimmed, map, t) = trim_fringe(&crown, &src, &dist_in, 0.3, &[0, 1], true).unwrap();
+        assert!(t.faces >= 1, "{t:?}");
+        assert_eq!(boundary_loops(&trimmed).len(), 1);
+        assert!(map.contains(&u32::MAX), "the apex is kept");
+        assert!(
+            crossing_pairs(
+                &trimmed,
+                &(0..trimmed.triangles.len() as u32).collect::<Vec<_>>()
+            )
+            .is_empty()
+        );
     }
 }
