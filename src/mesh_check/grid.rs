@@ -14,8 +14,10 @@ pub struct TriangleGrid {
     pub cell: f64,
     /// Cells along x, y, z.
     pub dims: [i64; 3],
-    /// `(cell id, face)`, sorted.
-    entries: Vec<(u64, u32)>,
+    /// `cell id << face_bits | face`, sorted (so by cell, then by face).
+    entries: Vec<u64>,
+    /// Bits the face index takes in an entry.
+    face_bits: u32,
     /// One bit per cell: whether any face is binned there (lets a query skip empty cells
     /// without a search).
     occupied: Vec<u64>,
@@ -56,11 +58,13 @@ impl TriangleGrid {
             (ext.y / cell).floor() as i64 + 1,
             (ext.z / cell).floor() as i64 + 1,
         ];
+        let max_face = faces.iter().copied().max().unwrap_or(0);
         let mut g = Self {
             origin: lo,
             cell,
             dims,
             entries: Vec::new(),
+            face_bits: u32::BITS - max_face.leading_zeros(),
             occupied: vec![0; ((dims[0] * dims[1] * dims[2]) as usize).div_ceil(64)],
         };
         for &f in faces {
@@ -72,13 +76,21 @@ impl TriangleGrid {
                     for x in il[0]..=ih[0] {
                         let id = g.id([x, y, z]);
                         g.occupied[(id / 64) as usize] |= 1 << (id % 64);
-                        g.entries.push((id, f));
+                        g.entries.push(id << g.face_bits | f as u64);
                     }
                 }
             }
         }
-        g.entries.sort_unstable();
+        radix_sort(&mut g.entries);
         g
+    }
+
+    fn cell_of_entry(&self, e: u64) -> u64 {
+        e >> self.face_bits
+    }
+
+    fn face_of_entry(&self, e: u64) -> u32 {
+        (e & ((1u64 << self.face_bits) - 1)) as u32
     }
 
     fn index_unclamped(&self, p: DVec3) -> [i64; 3] {
@@ -96,11 +108,13 @@ impl TriangleGrid {
     }
 
     fn faces_in(&self, id: u64) -> impl Iterator<Item = u32> + '_ {
-        let s = self.entries.partition_point(|&(c, _)| c < id);
+        let s = self
+            .entries
+            .partition_point(|&e| self.cell_of_entry(e) < id);
         self.entries[s..]
             .iter()
-            .take_while(move |&&(c, _)| c == id)
-            .map(|&(_, f)| f)
+            .take_while(move |&&e| self.cell_of_entry(e) == id)
+            .map(|&e| self.face_of_entry(e))
     }
 
     /// The binned faces sharing a cell with the box `[lo, hi]`, sorted and unique (a superset
@@ -140,13 +154,16 @@ impl TriangleGrid {
         let mut i = 0;
         while i < self.entries.len() {
             let mut j = i;
-            while j < self.entries.len() && self.entries[j].0 == self.entries[i].0 {
+            let id = self.cell_of_entry(self.entries[i]);
+            while j < self.entries.len() && self.cell_of_entry(self.entries[j]) == id {
                 j += 1;
             }
             let run = &self.entries[i..j];
-            for (k, &(_, f)) in run.iter().enumerate() {
+            for (k, &ef) in run.iter().enumerate() {
+                let f = self.face_of_entry(ef);
                 let (fl, fh) = bbox(f);
-                for &(_, g) in &run[k + 1..] {
+                for &eg in &run[k + 1..] {
+                    let g = self.face_of_entry(eg);
                     let (gl, gh) = bbox(g);
                     if fl.cmple(gh).all() && gl.cmple(fh).all() {
                         pairs.push((f.min(g), f.max(g)));
@@ -212,9 +229,70 @@ impl TriangleGrid {
     }
 }
 
+/// Sorts `keys` ascending: least significant digit first, 11 bits a pass, over the bits the
+/// largest key uses (a pass whose digit is the same in every key is skipped). The same order
+/// as `sort_unstable` (equal keys are identical).
+fn radix_sort(keys: &mut Vec<u64>) {
+    const BITS: u32 = 11;
+    const RADIX: usize = 1 << BITS;
+    if keys.len() < 256 {
+        keys.sort_unstable();
+        return;
+    }
+    let max = keys.iter().copied().max().unwrap_or(0);
+    let used = u64::BITS - max.leading_zeros();
+    let mut other = vec![0u64; keys.len()];
+    let mut count = vec![0usize; RADIX];
+    let mut shift = 0;
+    while shift < used {
+        count.iter_mut().for_each(|c| *c = 0);
+        let digit = |k: u64| ((k >> shift) as usize) & (RADIX - 1);
+        for &k in keys.iter() {
+            count[digit(k)] += 1;
+        }
+        if count[digit(keys[0])] != keys.len() {
+            let mut sum = 0;
+            for c in count.iter_mut() {
+                let n = *c;
+                *c = sum;
+                sum += n;
+            }
+            for &k in keys.iter() {
+                let d = digit(k);
+                other[count[d]] = k;
+                count[d] += 1;
+            }
+            std::mem::swap(keys, &mut other);
+        }
+        shift += BITS;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The radix sort orders like `sort_unstable`: short and long inputs, keys spread over
+    /// few and many bits, repeats, and digits constant in every key (skipped passes).
+    #[test]
+    fn radix_sort_equals_sort_unstable() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for len in [0usize, 1, 255, 256, 1000, 70_000] {
+            for mask in [0u64, 7, 0xffff, 0x7ff << 22 | 0xff, u64::MAX] {
+                let mut keys: Vec<u64> = (0..len).map(|_| next() & mask).collect();
+                let mut expect = keys.clone();
+                expect.sort_unstable();
+                radix_sort(&mut keys);
+                assert_eq!(keys, expect, "len {len} mask {mask:x}");
+            }
+        }
+    }
 
     /// A strip of small triangles: the faces a box query visits are a superset of those whose
     /// boxes overlap it, for a grid over the whole mesh and over a sub-region alike, and the
