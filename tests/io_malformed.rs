@@ -165,6 +165,19 @@ fn wrong_counts_are_reported() {
         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     expect_io(&put(&d, "c.ply", ply.as_bytes()), &["c.ply"]);
+    // PLY: an element without properties declaring 10^16 items (its items take no bytes, so
+    // reading them would loop that often): refused at once, the element named.
+    let empty = "ply\nformat binary_little_endian 1.0\nelement v 10000000000000000\n\
+        element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+    let mut bytes = empty.as_bytes().to_vec();
+    bytes.extend([0u8; 12]);
+    expect_io(
+        &put(&d, "e.ply", &bytes),
+        &[
+            "e.ply",
+            "element `v` declares 10000000000000000 items but no properties",
+        ],
+    );
     // VTP: 4 points announced, 3 given.
     let vtp = r#"<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="0">
 <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>

@@ -138,6 +138,18 @@ pub fn read_ply_bytes_with(
     let mut faces: Vec<PlyFace> = Vec::new();
     let mut face_key = None;
     let mut has_flabel = false;
+    // An item of an element without properties takes no bytes: reading a declared count of them
+    // would loop that many times over nothing (a damaged header can declare 10^16).
+    if let Some((name, def)) = header
+        .elements
+        .iter()
+        .find(|(_, d)| d.properties.is_empty() && d.count > 0)
+    {
+        return Err(err(format!(
+            "element `{name}` declares {} items but no properties",
+            def.count
+        )));
+    }
     // Elements are stored in file order; each is read with its own element type.
     for (name, def) in &header.elements {
         match name.as_str() {
