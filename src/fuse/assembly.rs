@@ -11,7 +11,7 @@ use crate::stitch::{self, BandLoops, BandVertex};
 use crate::{Error, Result};
 use glam::DVec3;
 
-/// The stitching stage of [`fuse_tooth`] (paper Algorithm 1): builds the band between the
+/// The stitching stage of [`fuse_tooth`](super::fuse_tooth) (paper Algorithm 1): builds the band between the
 /// crown's margin loop and the root's cut loop (`opts.stitch`), assembles crown + band + root
 /// into one closed mesh, optimises the band and measures the quality. `opts.cut` is not used (the
 /// cut is done). Errors name the tooth.

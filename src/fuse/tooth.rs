@@ -19,7 +19,7 @@ pub struct FusedTooth {
     /// The fused closed mesh, output frame. Vertices: first the (repaired) IOS crown's, then the
     /// band interior, then the CBCT root.
     pub mesh: TriMesh,
-    /// Per vertex: [`VertexSource`] as `u8` (0 IOS, 1 band or fill, 2 CBCT).
+    /// Per vertex: [`VertexSource`](super::VertexSource) as `u8` (0 IOS, 1 band or fill, 2 CBCT).
     pub source: Vec<u8>,
     /// Per vertex of `mesh`: the index of the IOS crown input vertex it is (its position is
     /// bitwise `ios_to_output.apply(input)`), or `u32::MAX` for band, fill and CBCT vertices.

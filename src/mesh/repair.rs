@@ -428,13 +428,8 @@ mod tests {
     /// set, at most two faces per edge), both answers seen often.
     #[test]
     fn consistent_orientation_check_matches_the_propagation() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |n: u64| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x % n
-        };
+        let mut rng = crate::phantom::rng::Rng::new(7);
+        let mut next = |n: u64| rng.below(n as usize) as u64;
         let mut seen = [0usize; 2];
         for _ in 0..20_000 {
             let positions: Vec<DVec3> = (0..16)

@@ -276,13 +276,8 @@ mod tests {
     /// few and many bits, repeats, and digits constant in every key (skipped passes).
     #[test]
     fn radix_sort_equals_sort_unstable() {
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
+        let mut rng = crate::phantom::rng::Rng::new(11);
+        let mut next = || rng.next_u64();
         for len in [0usize, 1, 255, 256, 1000, 70_000] {
             for mask in [0u64, 7, 0xffff, 0x7ff << 22 | 0xff, u64::MAX] {
                 let mut keys: Vec<u64> = (0..len).map(|_| next() & mask).collect();

@@ -286,16 +286,9 @@ mod tests {
     /// coplanar ones.
     #[test]
     fn orient3d_filter_agrees_with_orient3d() {
-        let state = std::cell::Cell::new(0x9e37_79b9_7f4a_7c15u64);
-        let next = || {
-            let mut x = state.get();
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            state.set(x);
-            x
-        };
-        let unit = || (next() >> 11) as f64 / (1u64 << 53) as f64;
+        let rng = std::cell::RefCell::new(crate::phantom::rng::Rng::new(3));
+        let next = || rng.borrow_mut().next_u64();
+        let unit = || rng.borrow_mut().unit();
         let (mut answered, mut gave_up) = (0, 0);
         for i in 0..300_000 {
             let mut p: Vec<DVec3> = (0..4)
