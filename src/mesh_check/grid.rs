@@ -81,7 +81,7 @@ impl TriangleGrid {
                 }
             }
         }
-        radix_sort(&mut g.entries);
+        crate::radix::sort_by_key(&mut g.entries, |&k| k);
         g
     }
 
@@ -229,65 +229,9 @@ impl TriangleGrid {
     }
 }
 
-/// Sorts `keys` ascending: least significant digit first, 11 bits a pass, over the bits the
-/// largest key uses (a pass whose digit is the same in every key is skipped). The same order
-/// as `sort_unstable` (equal keys are identical).
-fn radix_sort(keys: &mut Vec<u64>) {
-    const BITS: u32 = 11;
-    const RADIX: usize = 1 << BITS;
-    if keys.len() < 256 {
-        keys.sort_unstable();
-        return;
-    }
-    let max = keys.iter().copied().max().unwrap_or(0);
-    let used = u64::BITS - max.leading_zeros();
-    let mut other = vec![0u64; keys.len()];
-    let mut count = vec![0usize; RADIX];
-    let mut shift = 0;
-    while shift < used {
-        count.iter_mut().for_each(|c| *c = 0);
-        let digit = |k: u64| ((k >> shift) as usize) & (RADIX - 1);
-        for &k in keys.iter() {
-            count[digit(k)] += 1;
-        }
-        if count[digit(keys[0])] != keys.len() {
-            let mut sum = 0;
-            for c in count.iter_mut() {
-                let n = *c;
-                *c = sum;
-                sum += n;
-            }
-            for &k in keys.iter() {
-                let d = digit(k);
-                other[count[d]] = k;
-                count[d] += 1;
-            }
-            std::mem::swap(keys, &mut other);
-        }
-        shift += BITS;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The radix sort orders like `sort_unstable`: short and long inputs, keys spread over
-    /// few and many bits, repeats, and digits constant in every key (skipped passes).
-    #[test]
-    fn radix_sort_equals_sort_unstable() {
-        let mut rng = crate::phantom::rng::Rng::new(11);
-        let mut next = || rng.next_u64();
-        for len in [0usize, 1, 255, 256, 1000, 70_000] {
-            for mask in [0u64, 7, 0xffff, 0x7ff << 22 | 0xff, u64::MAX] {
-                let mut keys: Vec<u64> = (0..len).map(|_| next() & mask).collect();
-                let mut expect = keys.clone();
-                expect.sort_unstable();
-                radix_sort(&mut keys);
-                assert_eq!(keys, expect, "len {len} mask {mask:x}");
-            }
-        }
-    }
 
     /// A strip of small triangles: the faces a box query visits are a superset of those whose
     /// boxes overlap it, for a grid over the whole mesh and over a sub-region alike, and the
