@@ -82,32 +82,40 @@ fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
 }
 
 /// Pairs `(f, g)` of faces of `mesh`, `f` among `candidates`, that cross (or touch improperly),
-/// exact test; each pair once, sorted.
+/// exact test; each pair once, sorted. The candidates (a crown's fringe: a thin ring of faces)
+/// are binned, and every face of the mesh whose box meets their region looks up the candidates
+/// its box overlaps.
 pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     if candidates.is_empty() {
         return out;
     }
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut edges = 0.0;
     for &f in candidates {
         let (l, h) = bbox(mesh, f as usize);
         lo = lo.min(l);
         hi = hi.max(h);
+        let [a, b, c] = mesh.corners(f as usize);
+        edges += (b - a).length() + (c - b).length() + (a - c).length();
     }
-    let near: Vec<u32> = (0..mesh.triangles.len() as u32)
-        .filter(|&g| {
-            let (l, h) = bbox(mesh, g as usize);
-            l.cmple(hi).all() && lo.cmple(h).all()
-        })
-        .collect();
-    let grid = TriangleGrid::over_region(mesh, &near, (lo, hi), 0.0);
-    for &f in candidates {
-        let (l, h) = bbox(mesh, f as usize);
-        for g in grid.faces_in_box(l, h) {
-            if g == f {
+    let cell = 2.0 * edges / (3 * candidates.len()) as f64;
+    let grid = TriangleGrid::over_region(mesh, candidates, (lo, hi), cell);
+    let mut hits = Vec::new();
+    for g in 0..mesh.triangles.len() as u32 {
+        let (gl, gh) = bbox(mesh, g as usize);
+        if !(gl.cmple(hi).all() && lo.cmple(gh).all()) {
+            continue;
+        }
+        hits.clear();
+        grid.for_each_in_box(gl, gh, |f| hits.push(f));
+        hits.sort_unstable();
+        hits.dedup();
+        for &f in &hits {
+            if f == g {
                 continue;
             }
-            let (gl, gh) = bbox(mesh, g as usize);
+            let (l, h) = bbox(mesh, f as usize);
             if gl.cmple(h).all()
                 && l.cmple(gh).all()
                 && triangles_intersect(mesh, f as usize, g as usize)
@@ -510,5 +518,39 @@ mod tests {
             )
             .is_empty()
         );
+    }
+
+    /// A soup of small random triangles, some candidates: the binned search finds exactly the
+    /// pairs a test of every candidate against every face finds.
+    #[test]
+    fn crossing_pairs_are_every_crossing_of_a_candidate() {
+        let mut rng = crate::phantom::rng::Rng::new(3);
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for f in 0..400u32 {
+            let c = DVec3::new(
+                rng.range(0.0, 3.0),
+                rng.range(0.0, 3.0),
+                rng.range(0.0, 1.0),
+            );
+            for _ in 0..3 {
+                positions.push(c + 0.3 * rng.unit_vector());
+            }
+            triangles.push([3 * f, 3 * f + 1, 3 * f + 2]);
+        }
+        let mesh = TriMesh::new(positions, triangles);
+        let candidates: Vec<u32> = (0..400).filter(|f| f % 7 == 0).collect();
+        let mut expect = Vec::new();
+        for &f in &candidates {
+            for g in 0..400u32 {
+                if g != f && triangles_intersect(&mesh, f as usize, g as usize) {
+                    expect.push((f.min(g), f.max(g)));
+                }
+            }
+        }
+        expect.sort_unstable();
+        expect.dedup();
+        assert!(expect.len() > 20, "{} pairs", expect.len());
+        assert_eq!(crossing_pairs(&mesh, &candidates), expect);
     }
 }
