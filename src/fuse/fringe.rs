@@ -202,6 +202,11 @@ pub fn trim_fringe(
             *b |= l;
         }
         listed.clear();
+        if !bad.contains(&true) {
+            // Nothing to remove: the round ends as the peel would, without its topology.
+            report.rounds += 1;
+            break;
+        }
         // Only faces with an edge on the margin go in one round (peeling): removing a face
         // deeper in would cut a slot into the crown, and a margin that doubles back on itself
         // no longer charts around the tooth. What lies under a removed face is looked at again
