@@ -8,7 +8,7 @@
 use crate::mesh::TriMesh;
 use crate::mesh_check;
 use glam::DVec3;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Smallest angle (degrees) of a triangle given by corner positions (0 for a degenerate one):
 /// the smallest of [`triangle_angles`](super::quality::triangle_angles), found as the angle at
@@ -65,7 +65,8 @@ fn flip_pass_where(
 ) -> usize {
     // Edge → its faces in `faces` order (the first two, and how many). A hash map for lookups
     // only: the edges are visited in sorted order, so the result does not depend on hashing.
-    let mut edges: HashMap<(u32, u32), EdgeFaces> = HashMap::with_capacity(faces.len() * 2);
+    let mut edges: HashMap<(u32, u32), EdgeFaces> =
+        HashMap::with_capacity_and_hasher(faces.len() * 2, Default::default());
     for &f in faces {
         let t = mesh.triangles[f];
         for k in 0..3 {
