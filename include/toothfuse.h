@@ -1355,7 +1355,7 @@ uint32_t toothfuse_abi_version(void);
  *   world frame (pass an LPS or a RAS matrix as the host expects). When NULL, `spacing` (3
  *   doubles, mm, negative flips an axis) and `origin` (3 doubles, world position of voxel 0's
  *   centre) give an axis-aligned grid; both must then be non-NULL.
- * - `labels`: `label_count` (= dims[0]*dims[1]*dims[2]) values of `label_type`, aligned for it.
+ * - `labels`: `label_count` (= `dims[0] * dims[1] * dims[2]`) values of `label_type`, aligned for it.
  * - `scheme`: the numbering of the label values. With TOOTHFUSE_VOLUME_SCHEME_DENTALSEGMENTATOR
  *   (one teeth label per jaw, no tooth numbers) the IOS teeth must be added first: each jaw's
  *   IOS crowns are registered as one arch to its teeth mask, the mask is split into teeth

@@ -3,7 +3,7 @@
 #   bash scripts/test.sh
 # On a fresh Debian machine it installs (apt-get) cmake, pkg-config, g++, libvtk9-dev,
 # libopenmesh-dev, libgtest-dev, and cbindgen 0.29.0 (cargo), plus rustfmt/clippy (rustup).
-# Then: cargo fmt --check, cargo clippy -D warnings, cargo test --release (library, CLI and
+# Then: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warnings, cargo test --release (library, CLI and
 # integration tests), the header check,
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
 # tests against the installed package), an outside find_package consumer, a pkg-config build, and
@@ -56,6 +56,9 @@ cargo fmt --check
 
 section "cargo clippy --workspace --all-targets -- -D warnings (library, CLI, tests, examples, benches)"
 cargo clippy --workspace --all-targets -- -D warnings
+
+section "cargo doc --no-deps --lib with warnings denied (broken or ambiguous doc links)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
 
 section "cargo test --release --lib --bins --tests"
 # The library's unit tests, the CLI's and every integration test; the examples and benches are

@@ -1,6 +1,6 @@
 //! The panic boundary and the raw-pointer helpers every exported function goes through.
 //!
-//! Every `extern "C"` body runs inside [`ffi_panic_boundary!`] (after rustls-ffi's macro of the
+//! Every `extern "C"` body runs inside `ffi_panic_boundary!` (after rustls-ffi's macro of the
 //! same name): a panic never unwinds into C; it becomes `TOOTHFUSE_STATUS_PANIC` (or a NULL /
 //! zero result for functions that return no status). Functions on a session additionally run
 //! their body through `with_session`/`with_session_mut` (in `ffi::session`), which record the

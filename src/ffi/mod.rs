@@ -10,7 +10,7 @@
 //! a panic boundary; a panic poisons the session.
 //!
 //! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
-//! (reading a tooth back), [`file`] (reading mesh files), [`register`] (options, registration and its report), [`fuse`]
+//! (reading a tooth back), [`file`](mod@file) (reading mesh files), [`register`] (options, registration and its report), [`fuse`]
 //! (one-call fuse, fused meshes and their quality), [`stages`] (cut and stitch as separate
 //! stages, the cut roots), plus [`status`], [`version`] and the [`boundary`] helpers.
 

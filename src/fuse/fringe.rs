@@ -139,7 +139,7 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
 /// beyond the reach (a coarse crown's face on a margin edge, its apex farther than the reach):
 /// removing it keeps that corner in the faces around; and a listed face touching the margin at
 /// a vertex goes with that vertex's whole fan even where faces of the fan reach beyond. Either
-/// way no vertex beyond the reach is lost: a removal that would lose one is put back ([`peel`]).
+/// way no vertex beyond the reach is lost: a removal that would lose one is put back (see `peel`).
 pub fn trim_fringe(
     crown: &TriMesh,
     src: &[u32],

@@ -74,7 +74,7 @@ pub struct PipelineTiming {
     pub total_ms: f64,
 }
 
-/// The result of [`fuse`]: the registration, the fused jaw and the timing.
+/// The result of [`fuse`](fn@fuse): the registration, the fused jaw and the timing.
 #[derive(Clone, Debug)]
 pub struct PipelineResult {
     /// Registration (per-tooth transforms into the output frame, SD, warnings, skipped teeth).
@@ -129,7 +129,7 @@ pub fn fuse(
 }
 
 /// One-call fuse of per-tooth IOS crowns (open meshes by FDI, IOS frame) with CBCT teeth; see
-/// [`fuse`]. The crowns are merged into one labeled mesh for [`fuse::fuse_jaw`] (vertices not used by a
+/// [`fuse`](fn@fuse). The crowns are merged into one labeled mesh for [`fuse::fuse_jaw`] (vertices not used by a
 /// face are dropped there).
 pub fn fuse_crowns(
     crowns: &BTreeMap<u8, TriMesh>,

@@ -3,7 +3,7 @@
 //! the per-tooth preparation and before the coarse stage, so wrong data are refused in a fraction
 //! of a second instead of after a long registration that cannot succeed.
 //!
-//! A quick jaw-wide fit ([`quick_fit`]: centroid alignment, then a trimmed point-to-plane ICP on
+//! A quick jaw-wide fit (`quick_fit`: centroid alignment, then a trimmed point-to-plane ICP on
 //! at most 150 IOS points per tooth) is run under competing hypotheses:
 //!
 //! * the data as given;

@@ -1,9 +1,9 @@
 //! IOS–CBCT registration, paper section 2.2: centroid alignment (eq. 1, [`centroid`]), coarse
-//! point-to-plane ICP with one transform for all teeth (eq. 2, [`coarse`]) and sequential fine
-//! registration over groups of three neighbouring teeth (eq. 3, [`fine`]); plus, beyond the paper
+//! point-to-plane ICP with one transform for all teeth (eq. 2, `coarse`) and sequential fine
+//! registration over groups of three neighbouring teeth (eq. 3, `fine`); plus, beyond the paper
 //! and each behind an option, robust weights and pair rejection ([`icp`]), closest points on
 //! triangles ([`correspondence`]), a crown-only CBCT centroid, subsampling, a CBCT surface offset,
-//! a smooth-drift joint fine stage ([`drift`]) and a plausibility guard.
+//! a smooth-drift joint fine stage (`drift`) and a plausibility guard.
 //!
 //! Entry point: [`register`]. Presets: [`RegisterOptions::paper`] (faithful) and
 //! [`RegisterOptions::default`] (measured better on the synthetic jaw; see `eval`).
