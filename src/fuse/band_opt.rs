@@ -286,13 +286,8 @@ mod tests {
     /// triangles, slivers, needles and degenerate ones (repeated or collinear corners: 0).
     #[test]
     fn min_angle_is_the_smallest_of_the_three() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % 2_000_001) as f64 / 1_000_000.0 - 1.0
-        };
+        let mut rng = crate::phantom::rng::Rng::new(1);
+        let mut next = || rng.range(-1.0, 1.0);
         let reference = |a, b, c| {
             let [x, y, z] = triangle_angles(a, b, c);
             let m = x.min(y).min(z);

@@ -112,11 +112,9 @@ mod tests {
             f64::NAN,
         ];
         // A deterministic spread of magnitudes and fractions.
-        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = crate::phantom::rng::Rng::new(7);
         for _ in 0..200_000 {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
+            let s = rng.next_u64();
             let scale = 10f64.powi((s % 40) as i32 - 20);
             special.push(((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * scale);
             special.push(f64::from_bits(s));

@@ -326,13 +326,8 @@ mod tests {
     /// with and without it, and the lattice gives both answers often.
     #[test]
     fn one_side_filter_is_exact() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |n: u64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state % n
-        };
+        let mut rng = crate::phantom::rng::Rng::new(5);
+        let mut next = |n: u64| rng.below(n as usize) as u64;
         let mut hits = [0usize; 2];
         for _ in 0..200_000 {
             let positions: Vec<DVec3> = (0..6)

@@ -307,13 +307,8 @@ mod tests {
     /// system that already holds terms.
     #[test]
     fn upper_triangle_sums_are_the_full_products() {
-        let mut state = 12345u64;
-        let mut unit = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = crate::phantom::rng::Rng::new(12345);
+        let mut unit = move || rng.range(-0.5, 0.5);
         let pairs: Vec<Pair> = (0..500)
             .map(|_| Pair {
                 p: DVec3::new(unit(), unit(), unit()) * 40.0,

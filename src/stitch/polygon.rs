@@ -182,13 +182,8 @@ mod tests {
             })
             .collect();
         let p = Polygon::new(&poly);
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % 1_000_000) as f64 / 1_000_000.0
-        };
+        let mut rng = crate::phantom::rng::Rng::new(9);
+        let mut next = || rng.unit();
         let mut inside = 0;
         let mut queries: Vec<[f64; 2]> = (0..4000)
             .map(|_| [12.0 * next() - 6.0, 12.0 * next() - 6.0])
