@@ -163,17 +163,15 @@ pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -
         if chart.folded == 0 {
             return Ok(chart.band);
         }
+        // A folded chart band that does not cross itself cannot be beaten: no loft is built.
+        let chart_count = band_self_intersections(&chart.band, loops, usize::MAX);
+        if chart_count == 0 {
+            return Ok(chart.band);
+        }
         return Ok(match loft() {
-            Ok(b) => {
-                // The loft usually crosses itself many times more than the folded chart band:
-                // its count stops at the chart band's.
-                let chart_count = band_self_intersections(&chart.band, loops, usize::MAX);
-                if band_self_intersections(&b, loops, chart_count) < chart_count {
-                    b
-                } else {
-                    chart.band
-                }
-            }
+            // The loft usually crosses itself many times more than the folded chart band: its
+            // count stops at the chart band's.
+            Ok(b) if band_self_intersections(&b, loops, chart_count) < chart_count => b,
             _ => chart.band,
         });
     }
