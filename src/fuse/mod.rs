@@ -7,6 +7,7 @@ mod band_crossings;
 mod band_opt;
 pub mod fringe;
 mod jaw;
+mod near_faces;
 pub mod quality;
 mod tooth;
 pub mod untangle;

@@ -9,10 +9,11 @@
 //! budgeted ([`TESTS_PER_BAND_FACE`] per band face): on a band that cannot be untangled the
 //! rounds stop when it is spent, so the work stays proportional to the band whatever the input.
 
-use super::band_crossings::{Recount, band_region, bbox, count_all, overlap};
+use super::band_crossings::{Recount, bbox, count_all, overlap};
 use super::band_opt::min_angle;
+use super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
-use crate::mesh_check::{TriangleGrid, triangles_intersect};
+use crate::mesh_check::triangles_intersect;
 use glam::DVec3;
 use std::ops::Range;
 
@@ -112,6 +113,7 @@ pub fn untangle_band(
         changed.clear();
         out.unwrap_or_else(|| count_all(mesh, band.clone(), scale))
     };
+    let mut near = NearFaces::default();
     for round in 0..4 {
         let pairs = count(mesh, &report.crossing_pairs, &mut changed, round == 0);
         let bad = bad_faces(mesh, band.clone(), &pairs, min_angle_deg);
@@ -131,7 +133,7 @@ pub fn untangle_band(
         if verts.is_empty() {
             break;
         }
-        let grid = near_grid(mesh, band.clone(), scale);
+        near.update(mesh, band.clone(), scale);
         let mut moved = 0;
         for v in verts {
             let k = (v - movable.start) as usize;
@@ -139,7 +141,7 @@ pub fn untangle_band(
                 report.budget_spent = true;
                 break;
             }
-            if improve_vertex(mesh, v, &star[k], &grid, scale, &mut budget) {
+            if improve_vertex(mesh, v, &star[k], &near, scale, &mut budget) {
                 moved += 1;
                 changed.extend_from_slice(&star[k]);
                 // Its neighbours may do better now.
@@ -176,16 +178,6 @@ pub fn untangle_band(
         }
     }
     report
-}
-
-/// The faces near the band (boxes meeting the band's box grown by two band edges), binned.
-fn near_grid(mesh: &TriMesh, band: Range<usize>, scale: f64) -> TriangleGrid {
-    let region = band_region(mesh, band, 2.0 * scale);
-    let near: Vec<u32> = (0..mesh.triangles.len())
-        .filter(|&f| overlap(bbox(mesh, f), region))
-        .map(|f| f as u32)
-        .collect();
-    TriangleGrid::over(mesh, &near, 2.0 * scale)
 }
 
 fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
@@ -336,7 +328,7 @@ fn improve_vertex(
     mesh: &mut TriMesh,
     v: u32,
     star: &[u32],
-    grid: &TriangleGrid,
+    near: &NearFaces,
     scale: f64,
     budget: &mut usize,
 ) -> bool {
@@ -370,7 +362,7 @@ fn improve_vertex(
         hi = hi.max(mesh.positions[w as usize]);
     }
     let grow = DVec3::splat(0.5 * scale);
-    let around = Around::new(mesh, star, &grid.faces_in_box(lo - grow, hi + grow));
+    let around = Around::new(mesh, star, &near.faces_in_box(mesh, lo - grow, hi + grow));
     let Some(current) = score(mesh, star, &normals, &around, usize::MAX, None, budget) else {
         return false;
     };
