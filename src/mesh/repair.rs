@@ -141,6 +141,8 @@ pub fn repair_open_surface(
     // triangles stay exactly as they are (the usual clean crown).
     let topo = EdgeTopology::new(&m);
     let (ids, count) = connected_components_of(&topo, m.triangles.len());
+    // Consistent here, consistent after the islands go (fewer faces use no directed edge twice).
+    let consistent = orientation_consistent(&topo);
     let mut same_topo = Some(topo).filter(|_| count == 1);
     if count > 1 {
         let mut sizes = vec![0usize; count];
@@ -159,10 +161,11 @@ pub fn repair_open_surface(
             .collect();
         rep.island_faces = before - m.triangles.len();
     }
-    // 4. Consistent orientation by breadth-first propagation, then majority by area. On one
-    // component already consistent (the usual crown) the propagation flips and drops nothing.
+    // 4. Consistent orientation by breadth-first propagation, then majority by area. On faces
+    // already consistent (the usual crown, or what is left of a peeled one) the propagation
+    // flips and drops nothing.
     let before = m.triangles.len();
-    rep.flipped_faces = if same_topo.as_ref().is_some_and(orientation_consistent) {
+    rep.flipped_faces = if consistent {
         0
     } else {
         orient_consistently(&mut m)
