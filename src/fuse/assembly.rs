@@ -1,8 +1,8 @@
 //! The stitching stage of one tooth: the band between the crown's margin and the root's cut
 //! loop, crown + band + root assembled into one closed mesh, the band untangled, and where a
 //! crossing the untangling cannot remove is left, the crown's fringe trimmed and the band built
-//! again; where crossings are left after the builds, the best one's band is built once more with
-//! other tangent lengths.
+//! again; where crossings are left after the builds, the best one's crown loses the faces on its
+//! pierced margin edges and its band is built once more with other tangent lengths.
 
 use super::fringe::Listed;
 use super::quality;
@@ -194,25 +194,53 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         let Some((crown, map, t)) = r else {
             break;
         };
-        let margin = boundary_loops(&crown)
-            .into_iter()
-            .next()
-            .unwrap_or_default();
-        trimmed.faces += t.faces;
-        trimmed.vertices += t.vertices;
-        trimmed.max_reach_mm = trimmed.max_reach_mm.max(t.max_reach_mm);
-        trimmed.rounds += t.rounds;
-        side = CrownSide {
-            dirs: loop_dirs(&crown, &margin, ct.frame.axis),
-            chords: loop_chords(&crown, &margin, BandVertex::Upper),
-            crown,
-            margin,
-            ios_vertex: map,
-        };
+        add_trim(&mut trimmed, &t);
+        side = trimmed_side(ct, crown, map);
     }
-    let (mut a, trimmed, best_side) = best.expect("at least one attempt");
+    let (kept, kept_trim, kept_side) = best.expect("at least one attempt");
+    let (mut a, mut trimmed, mut best_side) = (kept, kept_trim, kept_side.clone());
+    let mut kept_build: Option<Assembled> = None;
+    // The later builds may have fared worse than the kept one: from the kept crown, only the
+    // faces on its pierced margin edges go, while that leaves fewer crossings.
+    for _ in 0..POLISH_ROUNDS {
+        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
+            break;
+        }
+        let pierced = pierced_margin_faces(&a, best_side.crown.positions.len());
+        let Some((crown, map, t)) = super::fringe::trim_fringe(
+            &best_side.crown,
+            &best_side.ios_vertex,
+            &ct.dist_in,
+            opts.fringe_reach_mm,
+            &pierced,
+            Listed::MarginEdge,
+        )
+        .filter(|_| !pierced.is_empty()) else {
+            break;
+        };
+        let next = trimmed_side(ct, crown, map);
+        let b = assemble(ct, &next, opts)?;
+        if crossings_left(&b) >= crossings_left(&a) {
+            break;
+        }
+        if kept_build.is_none() {
+            kept_build = Some(std::mem::replace(&mut a, b));
+        } else {
+            a = b;
+        }
+        add_trim(&mut trimmed, &t);
+        best_side = next;
+    }
     if crossings_left(&a) > 0 {
         a = reshaped(ct, &best_side, opts, a);
+        // The kept build reshaped may still beat the polished one (then its smaller trim).
+        if let Some(k) = kept_build.filter(|k| crossings_left(k) > 0) {
+            let k = reshaped(ct, &kept_side, opts, k);
+            if crossings_left(&k) <= crossings_left(&a) {
+                a = k;
+                trimmed = kept_trim;
+            }
+        }
     }
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
@@ -287,6 +315,32 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         cut_ms: ct.cut_ms,
         stitch_ms,
     })
+}
+
+/// Rounds of trimming the kept build's pierced margin faces after the builds, at most.
+const POLISH_ROUNDS: usize = 3;
+
+/// Adds one trim's counts to the tooth's.
+fn add_trim(total: &mut super::fringe::FringeTrim, t: &super::fringe::FringeTrim) {
+    total.faces += t.faces;
+    total.vertices += t.vertices;
+    total.max_reach_mm = total.max_reach_mm.max(t.max_reach_mm);
+    total.rounds += t.rounds;
+}
+
+/// The crown side of a trimmed crown (`map`: its vertices' IOS input indices).
+fn trimmed_side(ct: &CutTooth, crown: TriMesh, map: Vec<u32>) -> CrownSide {
+    let margin = boundary_loops(&crown)
+        .into_iter()
+        .next()
+        .unwrap_or_default();
+    CrownSide {
+        dirs: loop_dirs(&crown, &margin, ct.frame.axis),
+        chords: loop_chords(&crown, &margin, BandVertex::Upper),
+        crown,
+        margin,
+        ios_vertex: map,
+    }
 }
 
 /// Hermite tangent lengths (fractions of the loop-to-loop distance) of the band builds tried
