@@ -1,8 +1,10 @@
 //! The stitching stage of one tooth: the band between the crown's margin and the root's cut
 //! loop, crown + band + root assembled into one closed mesh, the band untangled, and where a
 //! crossing the untangling cannot remove is left, the crown's fringe trimmed and the band built
-//! again.
+//! again; where crossings are left after the builds, the best one's crown loses the faces on its
+//! pierced margin edges and its band is built once more with other tangent lengths.
 
+use super::fringe::Listed;
 use super::quality;
 use super::tooth::{CutTooth, FusedTooth, loop_chords, loop_dirs, margin_pts_of};
 use super::{FuseOptions, VertexSource};
@@ -21,6 +23,7 @@ pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
 
 /// The crown side of the band: the (possibly trimmed) crown, its margin, the directions across
 /// the margin, the crown's chords and its vertices' IOS input indices.
+#[derive(Clone)]
 struct CrownSide {
     crown: TriMesh,
     margin: Vec<u32>,
@@ -82,6 +85,43 @@ fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) -> Vec<u32>
         .collect()
 }
 
+/// The crown faces on a margin edge of a band face that crosses a crown face `g`, where the crown
+/// face on that edge crosses `g` too: the margin edge then passes through `g` (a fold of the
+/// crown at the margin), so no band face on that edge can clear `g` however its free corner
+/// moves; the margin there has to move (or `g` go).
+fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
+    let Some(u) = &a.untangle else {
+        return Vec::new();
+    };
+    let is_crown = |f: u32| (f as usize) < a.band.start;
+    let mut out = Vec::new();
+    for &(f, g) in &u.crossing_pairs {
+        let (band_face, g) = match (is_crown(f), is_crown(g)) {
+            (false, true) => (f, g),
+            (true, false) => (g, f),
+            _ => continue,
+        };
+        if !a.band.contains(&(band_face as usize)) {
+            continue;
+        }
+        let t = a.mesh.triangles[band_face as usize];
+        for k in 0..3 {
+            let (p, q) = (t[k], t[(k + 1) % 3]);
+            if (p as usize) >= crown_vertices || (q as usize) >= crown_vertices {
+                continue;
+            }
+            out.extend((0..a.band.start as u32).filter(|&c| {
+                let ct = a.mesh.triangles[c as usize];
+                c != g
+                    && ct.contains(&p)
+                    && ct.contains(&q)
+                    && crate::mesh_check::triangles_intersect(&a.mesh, c as usize, g as usize)
+            }));
+        }
+    }
+    out
+}
+
 /// Band builds per tooth at most (the first and the rebuilds after trimming the fringe). Each
 /// rebuild lays the band out anew on a changed margin, so the crossings left do not fall steadily
 /// from one attempt to the next: on rough phantom exports some teeth still crossed after six
@@ -108,54 +148,100 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     // Where the band cannot clear a crown face within the fringe, that face goes (with the faces
     // between it and the margin) and the band is built again on the new margin. Of the attempts,
     // the one with the fewest crossings left is kept (the earliest, least trimmed, on a tie).
-    let mut best: Option<(Assembled, super::fringe::FringeTrim)> = None;
+    let mut best: Option<(Assembled, super::fringe::FringeTrim, CrownSide)> = None;
     for attempt in 1..=MAX_ATTEMPTS {
         let a = assemble(ct, &side, opts)?;
-        let hits = if crossings_left(&a) > 0 {
-            crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
+        let (hits, pierced) = if crossings_left(&a) > 0 {
+            let hits = crown_faces_hit(&a, side.crown.positions.len(), attempt > 2);
+            let mut more = hits.clone();
+            more.extend(pierced_margin_faces(&a, side.crown.positions.len()));
+            more.sort_unstable();
+            more.dedup();
+            (hits, more)
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
         if best
             .as_ref()
-            .is_none_or(|(b, _)| crossings_left(&a) < crossings_left(b))
+            .is_none_or(|(b, _, _)| crossings_left(&a) < crossings_left(b))
         {
-            best = Some((a, trimmed));
+            best = Some((a, trimmed, side.clone()));
         }
         if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
             break;
         }
         // Only where nothing within the reach can go: a crossed face whose apex lies beyond it.
-        let trim = |listed_apex| {
+        // Only where neither can go, the same with the crown faces whose margin edge pierces a
+        // crossed face listed too; and last, listed faces on a margin edge whatever the reach
+        // of their corners (none of them is lost: the margin moves, no vertex goes).
+        let trim = |listed: &[u32], mode| {
             super::fringe::trim_fringe(
                 &side.crown,
                 &side.ios_vertex,
                 &ct.dist_in,
                 opts.fringe_reach_mm,
-                &hits,
-                listed_apex,
+                listed,
+                mode,
             )
         };
-        let Some((crown, map, t)) = trim(false).or_else(|| trim(true)) else {
+        let mut r = trim(&hits, Listed::Within).or_else(|| trim(&hits, Listed::Apex));
+        if r.is_none() && pierced.len() > hits.len() {
+            r = trim(&pierced, Listed::Within).or_else(|| trim(&pierced, Listed::Apex));
+        }
+        if r.is_none() {
+            r = trim(&pierced, Listed::MarginEdge);
+        }
+        let Some((crown, map, t)) = r else {
             break;
         };
-        let margin = boundary_loops(&crown)
-            .into_iter()
-            .next()
-            .unwrap_or_default();
-        trimmed.faces += t.faces;
-        trimmed.vertices += t.vertices;
-        trimmed.max_reach_mm = trimmed.max_reach_mm.max(t.max_reach_mm);
-        trimmed.rounds += t.rounds;
-        side = CrownSide {
-            dirs: loop_dirs(&crown, &margin, ct.frame.axis),
-            chords: loop_chords(&crown, &margin, BandVertex::Upper),
-            crown,
-            margin,
-            ios_vertex: map,
-        };
+        add_trim(&mut trimmed, &t);
+        side = trimmed_side(ct, crown, map);
     }
-    let (a, trimmed) = best.expect("at least one attempt");
+    let (kept, kept_trim, kept_side) = best.expect("at least one attempt");
+    let (mut a, mut trimmed, mut best_side) = (kept, kept_trim, kept_side.clone());
+    let mut kept_build: Option<Assembled> = None;
+    // The later builds may have fared worse than the kept one: from the kept crown, only the
+    // faces on its pierced margin edges go, while that leaves fewer crossings.
+    for _ in 0..POLISH_ROUNDS {
+        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
+            break;
+        }
+        let pierced = pierced_margin_faces(&a, best_side.crown.positions.len());
+        let Some((crown, map, t)) = super::fringe::trim_fringe(
+            &best_side.crown,
+            &best_side.ios_vertex,
+            &ct.dist_in,
+            opts.fringe_reach_mm,
+            &pierced,
+            Listed::MarginEdge,
+        )
+        .filter(|_| !pierced.is_empty()) else {
+            break;
+        };
+        let next = trimmed_side(ct, crown, map);
+        let b = assemble(ct, &next, opts)?;
+        if crossings_left(&b) >= crossings_left(&a) {
+            break;
+        }
+        if kept_build.is_none() {
+            kept_build = Some(std::mem::replace(&mut a, b));
+        } else {
+            a = b;
+        }
+        add_trim(&mut trimmed, &t);
+        best_side = next;
+    }
+    if crossings_left(&a) > 0 {
+        a = reshaped(ct, &best_side, opts, a);
+        // The kept build reshaped may still beat the polished one (then its smaller trim).
+        if let Some(k) = kept_build.filter(|k| crossings_left(k) > 0) {
+            let k = reshaped(ct, &kept_side, opts, k);
+            if crossings_left(&k) <= crossings_left(&a) {
+                a = k;
+                trimmed = kept_trim;
+            }
+        }
+    }
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
@@ -229,6 +315,57 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         cut_ms: ct.cut_ms,
         stitch_ms,
     })
+}
+
+/// Rounds of trimming the kept build's pierced margin faces after the builds, at most.
+const POLISH_ROUNDS: usize = 3;
+
+/// Adds one trim's counts to the tooth's.
+fn add_trim(total: &mut super::fringe::FringeTrim, t: &super::fringe::FringeTrim) {
+    total.faces += t.faces;
+    total.vertices += t.vertices;
+    total.max_reach_mm = total.max_reach_mm.max(t.max_reach_mm);
+    total.rounds += t.rounds;
+}
+
+/// The crown side of a trimmed crown (`map`: its vertices' IOS input indices).
+fn trimmed_side(ct: &CutTooth, crown: TriMesh, map: Vec<u32>) -> CrownSide {
+    let margin = boundary_loops(&crown)
+        .into_iter()
+        .next()
+        .unwrap_or_default();
+    CrownSide {
+        dirs: loop_dirs(&crown, &margin, ct.frame.axis),
+        chords: loop_chords(&crown, &margin, BandVertex::Upper),
+        crown,
+        margin,
+        ios_vertex: map,
+    }
+}
+
+/// Hermite tangent lengths (fractions of the loop-to-loop distance) of the band builds tried
+/// again on the best attempt's crown where crossings are left: a band leaving the margin
+/// steeper or flatter than the default passes a fold at the margin on another side.
+const RESHAPE_TANGENTS: [f64; 4] = [0.4, 1.2, 0.0, 1.6];
+
+/// Builds the band on `side` again with other tangent lengths ([`RESHAPE_TANGENTS`]) and keeps
+/// the build with the fewest crossings left (`best`, the default's, on a tie; a build that
+/// fails is skipped). Only teeth still crossed after the trimming attempts pay for it.
+fn reshaped(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions, mut best: Assembled) -> Assembled {
+    for t in RESHAPE_TANGENTS {
+        if crossings_left(&best) == 0 {
+            break;
+        }
+        let mut o = *opts;
+        o.stitch.tangent_scale = t;
+        let Ok(a) = assemble(ct, side, &o) else {
+            continue;
+        };
+        if crossings_left(&a) < crossings_left(&best) {
+            best = a;
+        }
+    }
+    best
 }
 
 /// Intersecting face pairs with a band face the untangling left (0 without untangling).

@@ -14,6 +14,20 @@ use glam::DVec3;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+/// Which listed faces (the `extra` of [`trim_fringe`]) count as fringe beside the faces whose
+/// corners all lie within the reach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Listed {
+    /// None: only faces within the reach.
+    Within,
+    /// A listed face with one corner beyond the reach; and a listed face touching the margin
+    /// at a vertex goes with that vertex's whole fan even where faces of the fan reach beyond.
+    Apex,
+    /// As [`Listed::Apex`], and a listed face on a margin edge whatever the reach of its
+    /// corners (after earlier trims the margin itself may lie beyond the reach).
+    MarginEdge,
+}
+
 /// What [`trim_fringe`] removed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FringeTrim {
@@ -135,19 +149,23 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
 /// them and the margin, and repairs it back to one disk. Returns `None` when nothing had to go.
 /// `dist_in` is the geodesic distance of each *input* vertex from the original margin
 /// ([`edge_distance`] over the first crown), so repeated calls never reach farther. With
-/// `listed_apex`, a face of `extra` counts as fringe also when only one of its corners lies
+/// [`Listed::Apex`], a face of `extra` counts as fringe also when only one of its corners lies
 /// beyond the reach (a coarse crown's face on a margin edge, its apex farther than the reach):
 /// removing it keeps that corner in the faces around; and a listed face touching the margin at
-/// a vertex goes with that vertex's whole fan even where faces of the fan reach beyond. Either
-/// way no vertex beyond the reach is lost: a removal that would lose one is put back (see `peel`).
+/// a vertex goes with that vertex's whole fan even where faces of the fan reach beyond. With
+/// [`Listed::MarginEdge`] besides, a listed face on a margin edge counts whatever the reach of
+/// its corners (earlier trims may have moved the margin itself beyond the reach): it goes alone
+/// and its corners stay in the faces around. Either way no vertex beyond the reach is lost: a
+/// removal that would lose one is put back (see `peel`).
 pub fn trim_fringe(
     crown: &TriMesh,
     src: &[u32],
     dist_in: &[f64],
     reach: f64,
     extra: &[u32],
-    listed_apex: bool,
+    listed_mode: Listed,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
+    let listed_apex = listed_mode >= Listed::Apex;
     let mut mesh = crown.clone();
     let mut map = src.to_vec();
     let mut report = FringeTrim::default();
@@ -164,13 +182,25 @@ pub fn trim_fringe(
     }
     for _ in 0..4 {
         let is_listed = |f: u32| listed.get(f as usize).copied().unwrap_or(false);
+        // Built when first needed (a round with nothing to remove does not need it).
+        let topo_cell = std::cell::OnceCell::new();
+        let topo = || topo_cell.get_or_init(|| crate::mesh::EdgeTopology::new(&mesh));
+        let on_edge = |a: u32, b: u32| topo().edge_face_count(a, b) == 1;
+        let on_margin_edge = |f: usize| {
+            let t = mesh.triangles[f];
+            (0..3).any(|k| on_edge(t[k], t[(k + 1) % 3]))
+        };
         let fringe: Vec<u32> = (0..mesh.triangles.len() as u32)
             .filter(|&f| {
                 let near = mesh.triangles[f as usize]
                     .iter()
                     .filter(|&&v| in_reach(&map, v))
                     .count();
-                near == 3 || (listed_apex && near == 2 && is_listed(f))
+                near == 3
+                    || (listed_apex && near == 2 && is_listed(f))
+                    || (listed_mode == Listed::MarginEdge
+                        && is_listed(f)
+                        && on_margin_edge(f as usize))
             })
             .collect();
         let is_fringe = {
@@ -211,8 +241,6 @@ pub fn trim_fringe(
         // deeper in would cut a slot into the crown, and a margin that doubles back on itself
         // no longer charts around the tooth. What lies under a removed face is looked at again
         // in the next round.
-        let topo = crate::mesh::EdgeTopology::new(&mesh);
-        let on_edge = |a: u32, b: u32| topo.edge_face_count(a, b) == 1;
         let mut boundary_vertex = vec![false; mesh.positions.len()];
         for t in &mesh.triangles {
             for k in 0..3 {
@@ -228,7 +256,7 @@ pub fn trim_fringe(
         let mut fans: Vec<u32> = Vec::new();
         for f in (0..mesh.triangles.len()).filter(|&f| is_fringe[f] && bad[f]) {
             let t = mesh.triangles[f];
-            if (0..3).any(|k| on_edge(t[k], t[(k + 1) % 3])) {
+            if on_margin_edge(f) {
                 remove[f] = true;
             } else {
                 fans.extend(t.iter().copied().filter(|&v| boundary_vertex[v as usize]));
@@ -404,7 +432,7 @@ mod tests {
     use super::*;
 
     /// A fan crown: apex 0 at 1 mm from its margin (the ring 1..=8). A listed face on a
-    /// margin edge goes only with `listed_apex`, and then alone: its apex stays in the faces
+    /// margin edge goes only with [`Listed::Apex`], and then alone: its apex stays in the faces
     /// around, so no vertex is lost and the crown stays one disk.
     #[test]
     fn a_listed_margin_face_goes_with_its_apex_beyond_the_reach_kept() {
@@ -418,8 +446,9 @@ mod tests {
         let src: Vec<u32> = (0..9).collect();
         let dist_in = edge_distance(&crown, &(1..=8).collect::<Vec<u32>>(), 10.0);
         assert!(dist_in[0] > 0.3 && dist_in[1..].iter().all(|&d| d == 0.0));
-        assert!(trim_fringe(&crown, &src, &dist_in, 0.3, &[2], false).is_none());
-        let (trimmed, map, t) = trim_fringe(&crown, &src, &dist_in, 0.3, &[2], true).unwrap();
+        assert!(trim_fringe(&crown, &src, &dist_in, 0.3, &[2], Listed::Within).is_none());
+        let (trimmed, map, t) =
+            trim_fringe(&crown, &src, &dist_in, 0.3, &[2], Listed::Apex).unwrap();
         assert_eq!((t.faces, t.vertices), (1, 0), "{t:?}");
         assert_eq!(trimmed.triangles.len(), 7);
         assert_eq!(map.len(), 9);
@@ -427,6 +456,37 @@ mod tests {
         // The apex is now on the margin, at its position.
         let apex = map.iter().position(|&s| s == 0).unwrap();
         assert_eq!(trimmed.positions[apex], crown.positions[0]);
+    }
+
+    /// The fan crown of the test above with its margin moved beyond the reach (every input
+    /// vertex 0.5 mm or more from the original margin, as after earlier trims): a listed face on
+    /// a margin edge goes only with [`Listed::MarginEdge`], alone, and no vertex is lost.
+    #[test]
+    fn a_listed_margin_face_goes_where_the_margin_lies_beyond_the_reach() {
+        let mut positions = vec![DVec3::new(0.0, 0.0, 1.0)];
+        positions.extend((0..8).map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 8.0;
+            DVec3::new(a.cos(), a.sin(), 0.0)
+        }));
+        let triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
+        let crown = TriMesh::new(positions, triangles);
+        let src: Vec<u32> = (0..9).collect();
+        let mut dist_in = vec![0.5; 9];
+        dist_in[0] = 1.5;
+        for mode in [Listed::Within, Listed::Apex] {
+            assert!(trim_fringe(&crown, &src, &dist_in, 0.3, &[2], mode).is_none());
+        }
+        let (trimmed, map, t) =
+            trim_fringe(&crown, &src, &dist_in, 0.3, &[2], Listed::MarginEdge).unwrap();
+        assert_eq!((t.faces, t.vertices), (1, 0), "{t:?}");
+        assert_eq!(trimmed.triangles.len(), 7);
+        assert_eq!(boundary_loops(&trimmed).len(), 1);
+        for s in 0..9u32 {
+            let v = map.iter().position(|&x| x == s).unwrap();
+            assert_eq!(trimmed.positions[v], crown.positions[s as usize]);
+        }
+        // An unlisted face is not taken.
+        assert!(trim_fringe(&crown, &src, &dist_in, 0.3, &[], Listed::MarginEdge).is_none());
     }
 
     /// A disk of two rings round an apex (apex 0, ring 1..=8 at 0.5 mm, margin 9..=16 at
@@ -512,7 +572,8 @@ mod tests {
         let mut src: Vec<u32> = (0..9).collect();
         src[0] = u32::MAX;
         let dist_in = vec![0.0; 9];
-        let (trimmed, map, t) = trim_fringe(&crown, &src, &dist_in, 0.3, &[0, 1], true).unwrap();
+        let (trimmed, map, t) =
+            trim_fringe(&crown, &src, &dist_in, 0.3, &[0, 1], Listed::Apex).unwrap();
         assert!(t.faces >= 1, "{t:?}");
         assert_eq!(boundary_loops(&trimmed).len(), 1);
         assert!(map.contains(&u32::MAX), "the apex is kept");

@@ -216,7 +216,7 @@ fn cut_inner(
                 &dist_in,
                 opts.fringe_reach_mm,
                 &[],
-                false,
+                super::fringe::Listed::Within,
             ) {
                 crown = m;
                 rep_src = map;
