@@ -431,18 +431,23 @@ fn peel(
 mod tests {
     use super::*;
 
-    /// A fan crown: apex 0 at 1 mm from its margin (the ring 1..=8). A listed face on a
-    /// margin edge goes only with [`Listed::Apex`], and then alone: its apex stays in the faces
-    /// around, so no vertex is lost and the crown stays one disk.
-    #[test]
-    fn a_listed_margin_face_goes_with_its_apex_beyond_the_reach_kept() {
+    /// A fan of 8 faces: apex 0 at (0, 0, 1) over the unit ring 1..=8 (its margin).
+    fn fan_crown() -> TriMesh {
         let mut positions = vec![DVec3::new(0.0, 0.0, 1.0)];
         positions.extend((0..8).map(|k| {
             let a = std::f64::consts::TAU * k as f64 / 8.0;
             DVec3::new(a.cos(), a.sin(), 0.0)
         }));
         let triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
-        let crown = TriMesh::new(positions, triangles);
+        TriMesh::new(positions, triangles)
+    }
+
+    /// A fan crown: apex 0 at 1 mm from its margin (the ring 1..=8). A listed face on a
+    /// margin edge goes only with [`Listed::Apex`], and then alone: its apex stays in the faces
+    /// around, so no vertex is lost and the crown stays one disk.
+    #[test]
+    fn a_listed_margin_face_goes_with_its_apex_beyond_the_reach_kept() {
+        let crown = fan_crown();
         let src: Vec<u32> = (0..9).collect();
         let dist_in = edge_distance(&crown, &(1..=8).collect::<Vec<u32>>(), 10.0);
         assert!(dist_in[0] > 0.3 && dist_in[1..].iter().all(|&d| d == 0.0));
@@ -463,13 +468,7 @@ mod tests {
     /// a margin edge goes only with [`Listed::MarginEdge`], alone, and no vertex is lost.
     #[test]
     fn a_listed_margin_face_goes_where_the_margin_lies_beyond_the_reach() {
-        let mut positions = vec![DVec3::new(0.0, 0.0, 1.0)];
-        positions.extend((0..8).map(|k| {
-            let a = std::f64::consts::TAU * k as f64 / 8.0;
-            DVec3::new(a.cos(), a.sin(), 0.0)
-        }));
-        let triangles: Vec<[u32; 3]> = (0..8u32).map(|k| [0, 1 + k, 1 + (k + 1) % 8]).collect();
-        let crown = TriMesh::new(positions, triangles);
+        let crown = fan_crown();
         let src: Vec<u32> = (0..9).collect();
         let mut dist_in = vec![0.5; 9];
         dist_in[0] = 1.5;
