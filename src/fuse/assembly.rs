@@ -129,9 +129,13 @@ fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
 /// jaws' teeth take at most four).
 const MAX_ATTEMPTS: usize = 10;
 
-fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
-    let t_start = std::time::Instant::now();
-    let mut warnings = ct.warnings.clone();
+/// The band builds of one tooth: built, and where crossings are left the crown's fringe
+/// trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. Returns the build with the
+/// fewest crossings left (the earliest, least trimmed, on a tie), its trim and its crown side.
+fn build_attempts(
+    ct: &CutTooth,
+    opts: &FuseOptions,
+) -> Result<(Assembled, super::fringe::FringeTrim, CrownSide)> {
     let mut side = CrownSide {
         crown: ct.crown.clone(),
         margin: ct.margin.clone(),
@@ -197,7 +201,20 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         add_trim(&mut trimmed, &t);
         side = trimmed_side(ct, crown, map);
     }
-    let (kept, kept_trim, kept_side) = best.expect("at least one attempt");
+    Ok(best.expect("at least one attempt"))
+}
+
+/// After the builds, for a kept build still crossed: its crown loses only the faces on its
+/// pierced margin edges while that leaves fewer crossings (up to [`POLISH_ROUNDS`] builds), then
+/// the band is built again with other tangent lengths ([`reshaped`]). Returns the build and the
+/// tooth's trim.
+fn polish(
+    ct: &CutTooth,
+    opts: &FuseOptions,
+    kept: Assembled,
+    kept_trim: super::fringe::FringeTrim,
+    kept_side: CrownSide,
+) -> Result<(Assembled, super::fringe::FringeTrim)> {
     let (mut a, mut trimmed, mut best_side) = (kept, kept_trim, kept_side.clone());
     let mut kept_build: Option<Assembled> = None;
     // The later builds may have fared worse than the kept one: from the kept crown, only the
@@ -242,6 +259,14 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             }
         }
     }
+    Ok((a, trimmed))
+}
+
+fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
+    let t_start = std::time::Instant::now();
+    let mut warnings = ct.warnings.clone();
+    let (kept, kept_trim, kept_side) = build_attempts(ct, opts)?;
+    let (a, trimmed) = polish(ct, opts, kept, kept_trim, kept_side)?;
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
