@@ -4,7 +4,7 @@
 # On a fresh Debian machine it installs (apt-get) cmake, pkg-config, g++, libvtk9-dev,
 # libopenmesh-dev, libgtest-dev, and cbindgen 0.29.0 (cargo), plus rustfmt/clippy (rustup).
 # Then: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warnings, cargo test --release (library, CLI and
-# integration tests), the header check,
+# integration tests; the test executables run side by side by scripts/run_test_binaries.py), the header check,
 # the exported-symbols check, the CMake build + install into build/prefix, ctest (C/C++/Python
 # tests against the installed package), an outside find_package consumer, a pkg-config build, and
 # the Python package: pip install ./bindings/python into a fresh venv (numpy and pytest from PyPI;
@@ -54,16 +54,20 @@ fi
 section "cargo fmt --check"
 cargo fmt --check
 
-section "cargo clippy --workspace --all-targets -- -D warnings (library, CLI, tests, examples, benches)"
-cargo clippy --workspace --all-targets -- -D warnings
+# Clippy and rustdoc in the release profile: their build scripts and proc macros are then the
+# ones the release build below uses (built once on a fresh machine, not once per profile).
+section "cargo clippy --release --workspace --all-targets -- -D warnings (library, CLI, tests, examples, benches)"
+cargo clippy --release --workspace --all-targets -- -D warnings
 
-section "cargo doc --no-deps --lib with warnings denied (broken or ambiguous doc links)"
-RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
+section "cargo doc --release --no-deps --lib with warnings denied (broken or ambiguous doc links)"
+RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps --lib
 
-section "cargo test --release --lib --bins --tests"
+section "cargo test --release --lib --bins --tests (test executables run $JOBS at a time)"
 # The library's unit tests, the CLI's and every integration test; the examples and benches are
-# compiled (checked) by clippy above and not built again here.
-cargo test --release --lib --bins --tests
+# compiled (checked) by clippy above and not built again here. scripts/run_test_binaries.py
+# builds them as `cargo test` does and runs the executables side by side, longest first (cargo
+# test runs one executable after the other and a core stays idle during the long ones).
+python3 scripts/run_test_binaries.py --jobs "$JOBS" -- --release --lib --bins --tests
 
 # ---------------------------------------------------------------------------------------------
 section "header check (include/toothfuse.h is what cbindgen $CBINDGEN_VERSION generates)"
