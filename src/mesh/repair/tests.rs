@@ -1,0 +1,229 @@
+//! Unit tests of the `repair` module.
+
+use super::*;
+use crate::mesh::fixtures::{cube, square};
+
+fn disk_with_hole() -> TriMesh {
+    // Cube without its bottom (margin) and with one top triangle pair removed (a hole).
+    let mut m = cube(1.0);
+    m.triangles.drain(0..2);
+    m
+}
+
+/// Where [`orientation_consistent`] says so, [`orient_consistently`] changes nothing:
+/// random patches of a vertex grid (several components, flipped faces, Möbius-like
+/// inconsistent strips) with the first two repair steps' guarantees (no repeated vertex
+/// set, at most two faces per edge), both answers seen often.
+#[test]
+fn consistent_orientation_check_matches_the_propagation() {
+    let mut rng = crate::phantom::rng::Rng::new(7);
+    let mut next = |n: u64| rng.below(n as usize) as u64;
+    let mut seen = [0usize; 2];
+    for _ in 0..20_000 {
+        let positions: Vec<DVec3> = (0..16)
+            .map(|i| DVec3::new((i % 4) as f64, (i / 4) as f64, (next(5) as f64) * 0.3))
+            .collect();
+        let mut faces: Vec<[u32; 3]> = Vec::new();
+        let mut keys: Vec<[u32; 3]> = Vec::new();
+        let mut use_count = std::collections::BTreeMap::new();
+        for _ in 0..next(14) + 1 {
+            let t = [next(16) as u32, next(16) as u32, next(16) as u32];
+            let mut k = t;
+            k.sort_unstable();
+            if k[0] == k[1] || k[1] == k[2] || keys.contains(&k) {
+                continue;
+            }
+            let edges = [(k[0], k[1]), (k[1], k[2]), (k[0], k[2])];
+            if edges
+                .iter()
+                .any(|e| use_count.get(e).copied().unwrap_or(0) >= 2)
+            {
+                continue;
+            }
+            for e in edges {
+                *use_count.entry(e).or_insert(0) += 1;
+            }
+            keys.push(k);
+            faces.push(t);
+        }
+        let m = TriMesh::new(positions, faces);
+        let consistent = orientation_consistent(&EdgeTopology::new(&m));
+        let mut o = m.clone();
+        let flipped = orient_consistently(&mut o);
+        if consistent {
+            assert_eq!((flipped, &o.triangles), (0, &m.triangles), "{m:?}");
+        }
+        seen[consistent as usize] += 1;
+    }
+    assert!(seen[0] > 1000 && seen[1] > 1000, "{seen:?}");
+}
+
+#[test]
+fn clean_patch_is_unchanged() {
+    let m = disk_with_hole();
+    let (r, src, rep) = repair_open_surface(&m, &RepairOptions::default());
+    assert!(rep.is_clean(), "{rep:?}");
+    assert_eq!(r.triangles, m.triangles);
+    assert_eq!(src, (0..8).collect::<Vec<u32>>());
+}
+
+#[test]
+fn fixes_duplicates_flips_islands_and_holes() {
+    let mut m = cube(1.0);
+    m.triangles.drain(0..2); // margin: bottom square
+    m.triangles.drain(0..2); // a hole on top, smaller? same size: make it a triangle hole instead
+    m.triangles.push([4, 5, 6]); // put back half the top: hole is triangle 4-6-7
+    m.triangles.push([4, 5, 6]); // duplicate
+    m.triangles[3].swap(1, 2); // a flipped face
+    m.triangles.push([5, 5, 6]); // degenerate
+    // A stray island.
+    let off = m.positions.len() as u32;
+    m.positions.extend([
+        DVec3::new(5.0, 0.0, 0.0),
+        DVec3::new(6.0, 0.0, 0.0),
+        DVec3::new(5.0, 1.0, 0.0),
+    ]);
+    m.triangles.push([off, off + 1, off + 2]);
+    // The hole (perimeter 3.41) is 85% of the margin (4): fill up to 90%.
+    let opts = RepairOptions {
+        max_hole_fraction: 0.9,
+    };
+    let (r, src, rep) = repair_open_surface(&m, &opts);
+    assert_eq!(rep.duplicate_faces, 1);
+    assert_eq!(rep.degenerate_faces, 1);
+    assert_eq!(rep.island_faces, 1);
+    assert_eq!(rep.flipped_faces, 1);
+    assert_eq!(rep.filled_holes, 1);
+    let report = r.validate(&Default::default()).unwrap();
+    assert_eq!(report.boundary_loops, 1);
+    assert_eq!(report.components, 1);
+    // Outward orientation kept: the top cap faces up.
+    let up = r
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(f, _)| r.face_cross(*f).z > 0.0)
+        .count();
+    assert!(up >= 2);
+    // Every kept original vertex sits where it was.
+    for (i, &s) in src.iter().enumerate() {
+        if s != u32::MAX {
+            assert_eq!(r.positions[i], m.positions[s as usize]);
+        }
+    }
+}
+
+/// Grids with random faces removed (many pinched vertices, faces between two of them):
+/// after the repair no vertex is pinched, every face is one of the input's faces with its
+/// corners renamed to copies of the same vertices, and several pinches were split at once.
+#[test]
+fn every_pinch_of_a_holed_grid_is_split() {
+    let mut rng = crate::phantom::rng::Rng::new(17);
+    let mut multi = 0;
+    for _ in 0..300 {
+        let (nx, ny) = (7u32, 6u32);
+        let positions: Vec<DVec3> = (0..nx * ny)
+            .map(|i| DVec3::new((i % nx) as f64, (i / nx) as f64, 0.0))
+            .collect();
+        let mut faces = Vec::new();
+        for y in 0..ny - 1 {
+            for x in 0..nx - 1 {
+                let (a, b, c, d) = (
+                    y * nx + x,
+                    y * nx + x + 1,
+                    (y + 1) * nx + x + 1,
+                    (y + 1) * nx + x,
+                );
+                for t in [[a, b, c], [a, c, d]] {
+                    if rng.unit() > 0.3 {
+                        faces.push(t);
+                    }
+                }
+            }
+        }
+        let m = TriMesh::new(positions, faces);
+        let (r, src, rep) = repair_open_surface(
+            &m,
+            &RepairOptions {
+                max_hole_fraction: 0.0,
+            },
+        );
+        assert!(crate::mesh::non_manifold_vertices(&r).is_empty());
+        let mut input: Vec<[u32; 3]> = m.triangles.clone();
+        input.sort_unstable();
+        for t in &r.triangles {
+            let o = t.map(|v| src[v as usize]);
+            assert!(input.binary_search(&o).is_ok(), "{o:?} is no input face");
+            for &v in t {
+                assert_eq!(
+                    r.positions[v as usize],
+                    m.positions[src[v as usize] as usize]
+                );
+            }
+        }
+        multi += (rep.split_vertices >= 2) as usize;
+    }
+    assert!(multi > 30, "{multi} grids with two or more splits");
+}
+
+#[test]
+fn splits_bow_tie_and_drops_third_face_on_edge() {
+    let m = TriMesh::new(
+        vec![
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Y,
+            -DVec3::X,
+            -DVec3::Y,
+            DVec3::Z,
+        ],
+        vec![[0, 1, 2], [0, 3, 4], [0, 2, 5], [0, 2, 1]],
+    );
+    let (r, _, rep) = repair_open_surface(
+        &m,
+        &RepairOptions {
+            max_hole_fraction: 0.0,
+        },
+    );
+    assert_eq!(rep.duplicate_faces, 1);
+    r.validate(&Default::default()).unwrap();
+    // The second fan of vertex 0 touched the rest only at that vertex: an island.
+    assert_eq!(rep.island_faces, 1);
+    // A real bow-tie inside one edge-connected piece: a hexagon fan around vertex 0 with two
+    // opposite triangles missing, the two remaining fans joined by two bridge triangles.
+    let mut p = vec![DVec3::ZERO];
+    p.extend((0..6).map(|k| {
+        let a = k as f64 * std::f64::consts::PI / 3.0;
+        DVec3::new(a.cos(), a.sin(), 0.0)
+    }));
+    let m = TriMesh::new(
+        p,
+        vec![
+            [0, 2, 3],
+            [0, 3, 4],
+            [0, 5, 6],
+            [0, 6, 1],
+            [3, 2, 1],
+            [1, 6, 3],
+        ],
+    );
+    assert_eq!(m.topology_report().non_manifold_vertices, 1);
+    let (r, src, rep) = repair_open_surface(
+        &m,
+        &RepairOptions {
+            max_hole_fraction: 0.0,
+        },
+    );
+    assert_eq!(rep.split_vertices, 1);
+    assert_eq!(
+        r.validate(&Default::default())
+            .unwrap()
+            .non_manifold_vertices,
+        0
+    );
+    assert_eq!(src.iter().filter(|&&s| s == 0).count(), 2);
+    let sq = square();
+    let (r2, _, rep2) = repair_open_surface(&sq, &RepairOptions::default());
+    assert!(rep2.is_clean());
+    assert_eq!(r2, sq);
+}
