@@ -15,6 +15,7 @@ mod drift;
 mod fine;
 pub mod gate;
 pub mod icp;
+mod measure;
 mod options;
 mod report;
 
@@ -300,6 +301,59 @@ fn crown_centroids(d: &ToothData, t: &Rigid, radius_mm: f64) -> Option<(DVec3, D
     Some((sum / area, centroid::mesh_centroid(&d.ios_mesh, true)?))
 }
 
+/// Stage 1: the caller's transform, or the centroid alignment of eq. (1) (on crown centroids
+/// with [`CentroidMode::CrownOnly`]). Fails with [`Error::MissingData`] under three teeth.
+fn initial_alignment(
+    teeth: &BTreeMap<u8, ToothData>,
+    skipped: &[Skipped],
+    opts: &RegisterOptions,
+) -> Result<Rigid> {
+    Ok(match opts.initial {
+        Some(t) => t,
+        None => {
+            if teeth.len() < 3 {
+                return Err(Error::MissingData(format!(
+                    "registration needs at least 3 teeth present in both IOS and CBCT, found {} ({:?}); \
+                 skipped: {}",
+                    teeth.len(),
+                    teeth.keys().collect::<Vec<_>>(),
+                    skipped
+                        .iter()
+                        .map(|s| format!("{} ({})", s.fdi, s.reason))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                )));
+            }
+            let area = opts.centroid != CentroidMode::WholeToothVertices;
+            let cc: BTreeMap<u8, DVec3> = teeth
+                .iter()
+                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(d.cbct.mesh(), area)?)))
+                .collect();
+            let ic: BTreeMap<u8, DVec3> = teeth
+                .iter()
+                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(&d.ios_mesh, area)?)))
+                .collect();
+            let mut t = centroid::centroid_alignment(&cc, &ic)?;
+            if let CentroidMode::CrownOnly { radius_mm, passes } = opts.centroid {
+                for _ in 0..passes {
+                    let (mut c2, mut i2) = (BTreeMap::new(), BTreeMap::new());
+                    for (f, d) in teeth {
+                        if let Some((c, i)) = crown_centroids(d, &t, radius_mm) {
+                            c2.insert(*f, c);
+                            i2.insert(*f, i);
+                        }
+                    }
+                    match centroid::centroid_alignment(&c2, &i2) {
+                        Ok(t2) => t = t2,
+                        Err(_) => break,
+                    }
+                }
+            }
+            t
+        }
+    })
+}
+
 /// Registers CBCT teeth to IOS crowns (paper section 2.2 and the options beyond it).
 ///
 /// `ios`: open crown meshes per FDI in the IOS frame; `cbct`: closed tooth meshes per FDI in the
@@ -360,50 +414,7 @@ pub fn register(
 
     // Stage 1: centroid alignment, eq. (1) (or the caller's transform).
     let t1 = Instant::now();
-    let initial = match opts.initial {
-        Some(t) => t,
-        None => {
-            if teeth.len() < 3 {
-                return Err(Error::MissingData(format!(
-                    "registration needs at least 3 teeth present in both IOS and CBCT, found {} ({:?}); \
-                     skipped: {}",
-                    teeth.len(),
-                    teeth.keys().collect::<Vec<_>>(),
-                    skipped
-                        .iter()
-                        .map(|s| format!("{} ({})", s.fdi, s.reason))
-                        .collect::<Vec<_>>()
-                        .join("; ")
-                )));
-            }
-            let area = opts.centroid != CentroidMode::WholeToothVertices;
-            let cc: BTreeMap<u8, DVec3> = teeth
-                .iter()
-                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(d.cbct.mesh(), area)?)))
-                .collect();
-            let ic: BTreeMap<u8, DVec3> = teeth
-                .iter()
-                .filter_map(|(f, d)| Some((*f, centroid::mesh_centroid(&d.ios_mesh, area)?)))
-                .collect();
-            let mut t = centroid::centroid_alignment(&cc, &ic)?;
-            if let CentroidMode::CrownOnly { radius_mm, passes } = opts.centroid {
-                for _ in 0..passes {
-                    let (mut c2, mut i2) = (BTreeMap::new(), BTreeMap::new());
-                    for (f, d) in &teeth {
-                        if let Some((c, i)) = crown_centroids(d, &t, radius_mm) {
-                            c2.insert(*f, c);
-                            i2.insert(*f, i);
-                        }
-                    }
-                    match centroid::centroid_alignment(&c2, &i2) {
-                        Ok(t2) => t = t2,
-                        Err(_) => break,
-                    }
-                }
-            }
-            t
-        }
-    };
+    let initial = initial_alignment(&teeth, &skipped, opts)?;
     timing.centroid_ms = ms(t1);
 
     // Stage 2: coarse registration, eq. (2).
@@ -441,112 +452,19 @@ pub fn register(
     let t4 = Instant::now();
     // Per tooth on several threads (each tooth's report depends on that tooth only); the jaw's
     // mean SD is summed in arch order afterwards, as before.
+    let stages = measure::Stages {
+        coarse: coarse_t,
+        fine: fine_stats.as_ref(),
+        coarse_stats,
+    };
     let per_tooth = crate::par::map_ordered(&order, |f| {
-        let d = &teeth[f];
-        let mut warnings: Vec<String> = gate_warnings.get(f).cloned().into_iter().collect();
-        let mut m = ios_to_cbct[f];
-        let correction = |m: &Rigid| {
-            let fine_c2i = m.inverse();
-            d.cbct
-                .mesh()
-                .positions
-                .iter()
-                .map(|p| fine_c2i.apply(*p).distance(coarse_t.apply(*p)))
-                .fold(0.0, f64::max)
-        };
-        let mut fine_correction = correction(&m);
-        if fine_stats.is_some() && fine_correction > opts.guard.max_fine_correction_mm {
-            warnings.push(format!(
-                "fine registration moved the tooth by up to {fine_correction:.3} mm, more than the \
-                 plausible drift of {:.3} mm (implausible: the fit diverged or slid); {}",
-                opts.guard.max_fine_correction_mm,
-                if opts.guard.reject_implausible {
-                    "kept the coarse transform instead"
-                } else {
-                    "accepted as computed, check this tooth"
-                }
-            ));
-            if opts.guard.reject_implausible {
-                m = coarse_inv;
-                fine_correction = 0.0;
-            }
-        } else if fine_stats.is_some() && fine_correction > opts.guard.flag_correction_mm {
-            warnings.push(format!(
-                "fine registration moved the tooth by up to {fine_correction:.3} mm relative to the \
-                 jaw-wide transform: large drift or a distorted CBCT crown, check this tooth"
-            ));
-        }
-        let dist: Vec<f64> = d
-            .report
-            .iter()
-            .map(|&k| d.cbct.closest_point(m.apply(d.ios_points[k])).distance)
-            .collect();
-        let nd = dist.len().max(1) as f64;
-        let sd = dist.iter().sum::<f64>() / nd;
-        let rmse = (dist.iter().map(|x| x * x).sum::<f64>() / nd).sqrt();
-        let inl = dist
-            .iter()
-            .filter(|&&x| x <= opts.inlier_distance_mm)
-            .count() as f64
-            / nd;
-        let dist_sum = dist.iter().sum::<f64>();
-        if sd > opts.guard.max_sd_mm {
-            warnings.push(format!(
-                "surface distance {sd:.3} mm exceeds {:.3} mm: CBCT artefact (metal?) or misregistration",
-                opts.guard.max_sd_mm
-            ));
-        }
-        let gap = top_gap(d, &m);
-        if gap.abs() > opts.guard.max_top_gap_mm {
-            warnings.push(format!(
-                "the IOS crown top lies {:.3} mm {} the CBCT crown top: the crown may have slid \
-                 along the tooth",
-                gap.abs(),
-                if gap < 0.0 { "below" } else { "above" }
-            ));
-        }
-        if inl < opts.guard.min_inlier_fraction {
-            warnings.push(format!(
-                "only {:.0}% of the IOS crown lies within {:.2} mm of the CBCT tooth",
-                inl * 100.0,
-                opts.inlier_distance_mm
-            ));
-        }
-        let st = fine_stats
-            .as_ref()
-            .and_then(|s| s.get(f).copied())
-            .or(coarse_stats)
-            .unwrap_or(StageStats {
-                converged: true,
-                ..StageStats::default()
-            });
-        if !st.converged {
-            warnings.push(format!(
-                "ICP did not converge within {} iterations",
-                st.iterations
-            ));
-        }
-        let cbct_to_ios = m.inverse();
-        let (c2o, i2o) = match opts.frame {
-            OutputFrame::Cbct => (Rigid::IDENTITY, m),
-            OutputFrame::Ios => (cbct_to_ios, Rigid::IDENTITY),
-        };
-        (
-            dist_sum,
-            dist.len(),
-            ToothRegistration {
-                fdi: *f,
-                cbct_to_ios,
-                cbct_to_output: c2o,
-                ios_to_output: i2o,
-                sd_mm: sd,
-                rmse_mm: rmse,
-                inlier_fraction: inl,
-                iterations: st.iterations,
-                converged: st.converged,
-                fine_correction_mm: fine_correction,
-                warnings,
-            },
+        measure::tooth_result(
+            *f,
+            &teeth[f],
+            ios_to_cbct[f],
+            gate_warnings.get(f),
+            &stages,
+            opts,
         )
     });
     let mut out = BTreeMap::new();
@@ -617,30 +535,6 @@ impl Registration {
     pub fn questionable(&self) -> bool {
         !self.gate.accepted.is_empty()
     }
-}
-
-/// Signed gap (mm) between the occlusal tops of the IOS crown (mapped by `ios_to_cbct`) and the
-/// CBCT tooth, along the direction from the CBCT tooth centroid to the crown centroid.
-fn top_gap(d: &ToothData, ios_to_cbct: &Rigid) -> f64 {
-    let cm = d.cbct.mesh();
-    let Some(cc) = crate::geom::centroid(&cm.positions) else {
-        return 0.0;
-    };
-    let dir = (ios_to_cbct.apply(d.ios_centroid) - cc).normalize_or_zero();
-    if dir == DVec3::ZERO {
-        return 0.0;
-    }
-    let top_c = cm
-        .positions
-        .iter()
-        .map(|p| p.dot(dir))
-        .fold(f64::MIN, f64::max);
-    let top_i = d
-        .all
-        .iter()
-        .map(|&k| ios_to_cbct.apply(d.ios_points[k]).dot(dir))
-        .fold(f64::MIN, f64::max);
-    top_i - top_c
 }
 
 fn ms(t: Instant) -> f64 {
