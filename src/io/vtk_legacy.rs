@@ -159,6 +159,69 @@ pub fn read_vtk_legacy_bytes_with(
         file,
         binary: false,
     };
+    read_header(&mut lx)?;
+    let mut points: Vec<DVec3> = Vec::new();
+    let mut blocks: [Option<CellBlock>; 4] = [None, None, None, None]; // verts, lines, polys, strips
+    let mut domain: Option<(bool, usize)> = None; // (is_point_data, count)
+    // Every one-component array with its values, in file order.
+    let mut scalars: Vec<(ArrayInfo, Vec<f64>)> = Vec::new();
+    while let Some(t) = lx.line() {
+        let kw = t[0].to_ascii_uppercase();
+        match kw.as_str() {
+            "POINTS" => {
+                let n = count_at(&lx, &t, 1, "POINTS")?;
+                let ty = t.get(2).cloned().unwrap_or_default();
+                let v = lx.values(n.saturating_mul(3), &ty, "POINTS")?;
+                points = v
+                    .chunks_exact(3)
+                    .map(|c| DVec3::new(c[0], c[1], c[2]))
+                    .collect();
+            }
+            "VERTICES" | "LINES" | "POLYGONS" | "TRIANGLE_STRIPS" => {
+                let slot = ["VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS"]
+                    .iter()
+                    .position(|k| *k == kw)
+                    .unwrap_or(0);
+                blocks[slot] = Some(read_cells(&mut lx, &t, &kw)?);
+            }
+            "POINT_DATA" | "CELL_DATA" => {
+                domain = Some((kw == "POINT_DATA", count_at(&lx, &t, 1, &kw)?));
+            }
+            "SCALARS"
+            | "FIELD"
+            | "VECTORS"
+            | "NORMALS"
+            | "TEXTURE_COORDINATES"
+            | "COLOR_SCALARS"
+            | "TENSORS"
+            | "GLOBAL_IDS"
+            | "PEDIGREE_IDS"
+            | "LOOKUP_TABLE" => {
+                let Some((is_point, n)) = domain else {
+                    return Err(lx.err(format!("{kw} before POINT_DATA or CELL_DATA")));
+                };
+                for (name, ty, comps, v) in read_attribute(&mut lx, &t, &kw, n)? {
+                    if comps == 1 {
+                        scalars.push((ArrayInfo::new(&name, is_point, &ty), v));
+                    }
+                }
+            }
+            "METADATA" => {
+                // Text block ended by a blank line.
+                while let Some(l) = lx.raw_line() {
+                    if l.is_empty() {
+                        break;
+                    }
+                }
+            }
+            _ => return Err(lx.err(format!("unexpected keyword {:?}", t[0]))),
+        }
+    }
+    assemble(file, points, &blocks, scalars, label_array)
+}
+
+/// The three header lines (version, title, ASCII/BINARY) and `DATASET POLYDATA`.
+fn read_header(lx: &mut Lex) -> Result<()> {
     let l1 = lx.raw_line().unwrap_or_default();
     if !l1.starts_with("# vtk DataFile") {
         return Err(lx.err("not a legacy VTK file (expected `# vtk DataFile Version x.y`)"));
@@ -179,158 +242,129 @@ pub fn read_vtk_legacy_bytes_with(
             if !t[1].eq_ignore_ascii_case("POLYDATA") {
                 return Err(lx.err(format!("DATASET {} is not supported (only POLYDATA)", t[1])));
             }
+            Ok(())
         }
-        _ => return Err(lx.err("expected `DATASET POLYDATA`")),
+        _ => Err(lx.err("expected `DATASET POLYDATA`")),
     }
-    let mut points: Vec<DVec3> = Vec::new();
-    let mut blocks: [Option<CellBlock>; 4] = [None, None, None, None]; // verts, lines, polys, strips
-    let mut domain: Option<(bool, usize)> = None; // (is_point_data, count)
-    // Every one-component array with its values, in file order.
-    let mut scalars: Vec<(ArrayInfo, Vec<f64>)> = Vec::new();
-    let num = |lx: &Lex, t: &[String], i: usize, what: &str| -> Result<usize> {
-        t.get(i)
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| lx.err(format!("{what}: expected a count as item {i} of {t:?}")))
+}
+
+/// Item `i` of the keyword line `t` as a count.
+fn count_at(lx: &Lex, t: &[String], i: usize, what: &str) -> Result<usize> {
+    t.get(i)
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| lx.err(format!("{what}: expected a count as item {i} of {t:?}")))
+}
+
+/// A cell block (`kw n size` line `t` read): the classic layout (count, then indices, per cell)
+/// or the VTK 5.1 one (OFFSETS, then CONNECTIVITY).
+fn read_cells(lx: &mut Lex, t: &[String], kw: &str) -> Result<CellBlock> {
+    let n = count_at(lx, t, 1, kw)?;
+    let size = count_at(lx, t, 2, kw)?;
+    let save = lx.pos;
+    let cells = match lx.line() {
+        Some(o) if o[0].eq_ignore_ascii_case("OFFSETS") => {
+            let oty = o.get(1).cloned().unwrap_or_default();
+            let offs = lx.values(n, &oty, "OFFSETS")?;
+            let c = lx.line().unwrap_or_default();
+            if c.first()
+                .is_none_or(|k| !k.eq_ignore_ascii_case("CONNECTIVITY"))
+            {
+                return Err(lx.err(format!("{kw}: expected CONNECTIVITY after OFFSETS")));
+            }
+            let cty = c.get(1).cloned().unwrap_or_default();
+            let conn = lx.values(size, &cty, "CONNECTIVITY")?;
+            split_offsets(lx, kw, &offs, &conn)?
+        }
+        _ => {
+            lx.pos = save;
+            let data = lx.values(size, "int", kw)?;
+            split_classic(lx, kw, n, &data)?
+        }
     };
-    while let Some(t) = lx.line() {
-        let kw = t[0].to_ascii_uppercase();
-        match kw.as_str() {
-            "POINTS" => {
-                let n = num(&lx, &t, 1, "POINTS")?;
-                let ty = t.get(2).cloned().unwrap_or_default();
-                let v = lx.values(n.saturating_mul(3), &ty, "POINTS")?;
-                points = v
-                    .chunks_exact(3)
-                    .map(|c| DVec3::new(c[0], c[1], c[2]))
-                    .collect();
+    Ok(CellBlock { cells })
+}
+
+/// An array of an attribute: name, type, components, values.
+type Attribute = (String, String, usize, Vec<f64>);
+
+/// One attribute of a POINT_DATA or CELL_DATA section of `n` tuples (keyword line `t` read):
+/// its arrays as (name, type, components, values); the attributes that cannot carry labels
+/// (vectors, normals, tensors, ids, texture coordinates, colours, lookup tables) are read past
+/// and give none.
+fn read_attribute(lx: &mut Lex, t: &[String], kw: &str, n: usize) -> Result<Vec<Attribute>> {
+    let mut found = Vec::new();
+    match kw {
+        "SCALARS" => {
+            let name = t.get(1).cloned().unwrap_or_default();
+            let ty = t.get(2).cloned().unwrap_or_default();
+            let comps = match t.get(3) {
+                Some(_) => count_at(lx, t, 3, "SCALARS")?,
+                None => 1,
+            };
+            let save = lx.pos;
+            match lx.line() {
+                Some(l) if l[0].eq_ignore_ascii_case("LOOKUP_TABLE") => {}
+                _ => lx.pos = save,
             }
-            "VERTICES" | "LINES" | "POLYGONS" | "TRIANGLE_STRIPS" => {
-                let slot = ["VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS"]
-                    .iter()
-                    .position(|k| *k == kw)
-                    .unwrap_or(0);
-                let n = num(&lx, &t, 1, &kw)?;
-                let size = num(&lx, &t, 2, &kw)?;
-                let save = lx.pos;
-                let cells = match lx.line() {
-                    Some(o) if o[0].eq_ignore_ascii_case("OFFSETS") => {
-                        let oty = o.get(1).cloned().unwrap_or_default();
-                        let offs = lx.values(n, &oty, "OFFSETS")?;
-                        let c = lx.line().unwrap_or_default();
-                        if c.first()
-                            .is_none_or(|k| !k.eq_ignore_ascii_case("CONNECTIVITY"))
-                        {
-                            return Err(
-                                lx.err(format!("{kw}: expected CONNECTIVITY after OFFSETS"))
-                            );
-                        }
-                        let cty = c.get(1).cloned().unwrap_or_default();
-                        let conn = lx.values(size, &cty, "CONNECTIVITY")?;
-                        split_offsets(&lx, &kw, &offs, &conn)?
-                    }
-                    _ => {
-                        lx.pos = save;
-                        let data = lx.values(size, "int", &kw)?;
-                        split_classic(&lx, &kw, n, &data)?
-                    }
-                };
-                blocks[slot] = Some(CellBlock { cells });
-            }
-            "POINT_DATA" | "CELL_DATA" => {
-                domain = Some((kw == "POINT_DATA", num(&lx, &t, 1, &kw)?));
-            }
-            "SCALARS"
-            | "FIELD"
-            | "VECTORS"
-            | "NORMALS"
-            | "TEXTURE_COORDINATES"
-            | "COLOR_SCALARS"
-            | "TENSORS"
-            | "GLOBAL_IDS"
-            | "PEDIGREE_IDS"
-            | "LOOKUP_TABLE" => {
-                let Some((is_point, n)) = domain else {
-                    return Err(lx.err(format!("{kw} before POINT_DATA or CELL_DATA")));
-                };
-                let mut found: Vec<(String, String, usize, Vec<f64>)> = Vec::new();
-                match kw.as_str() {
-                    "SCALARS" => {
-                        let name = t.get(1).cloned().unwrap_or_default();
-                        let ty = t.get(2).cloned().unwrap_or_default();
-                        let comps = match t.get(3) {
-                            Some(_) => num(&lx, &t, 3, "SCALARS")?,
-                            None => 1,
-                        };
-                        let save = lx.pos;
-                        match lx.line() {
-                            Some(l) if l[0].eq_ignore_ascii_case("LOOKUP_TABLE") => {}
-                            _ => lx.pos = save,
-                        }
-                        let v =
-                            lx.values(n.saturating_mul(comps), &ty, &format!("SCALARS {name}"))?;
-                        found.push((name, ty, comps, v));
-                    }
-                    "FIELD" => {
-                        let k = num(&lx, &t, 2, "FIELD")?;
-                        for _ in 0..k {
-                            let a = lx.line().unwrap_or_default();
-                            if a.first()
-                                .is_some_and(|s| s.eq_ignore_ascii_case("NULL_ARRAY"))
-                            {
-                                continue;
-                            }
-                            let comps = num(&lx, &a, 1, "FIELD array")?;
-                            let tuples = num(&lx, &a, 2, "FIELD array")?;
-                            let ty = a.get(3).cloned().unwrap_or_default();
-                            let name = a[0].clone();
-                            let v = lx.values(comps.saturating_mul(tuples), &ty, &name)?;
-                            if tuples == n {
-                                found.push((name, ty, comps, v));
-                            }
-                        }
-                    }
-                    "VECTORS" | "NORMALS" => {
-                        lx.values(n.saturating_mul(3), t.get(2).map_or("", |s| s), &kw)?;
-                    }
-                    "TENSORS" => {
-                        lx.values(n.saturating_mul(9), t.get(2).map_or("", |s| s), &kw)?;
-                    }
-                    "GLOBAL_IDS" | "PEDIGREE_IDS" => {
-                        lx.values(n, t.get(2).map_or("", |s| s), &kw)?;
-                    }
-                    "TEXTURE_COORDINATES" => {
-                        let d = num(&lx, &t, 2, &kw)?;
-                        lx.values(n.saturating_mul(d), t.get(3).map_or("", |s| s), &kw)?;
-                    }
-                    "COLOR_SCALARS" => {
-                        let d = num(&lx, &t, 2, &kw)?;
-                        let ty = if lx.binary { "unsigned_char" } else { "float" };
-                        lx.values(n.saturating_mul(d), ty, &kw)?;
-                    }
-                    _ => {
-                        // A standalone LOOKUP_TABLE name size: size RGBA entries.
-                        let size = num(&lx, &t, 2, &kw)?;
-                        let ty = if lx.binary { "unsigned_char" } else { "float" };
-                        lx.values(size.saturating_mul(4), ty, &kw)?;
-                    }
+            let v = lx.values(n.saturating_mul(comps), &ty, &format!("SCALARS {name}"))?;
+            found.push((name, ty, comps, v));
+        }
+        "FIELD" => {
+            let k = count_at(lx, t, 2, "FIELD")?;
+            for _ in 0..k {
+                let a = lx.line().unwrap_or_default();
+                if a.first()
+                    .is_some_and(|s| s.eq_ignore_ascii_case("NULL_ARRAY"))
+                {
+                    continue;
                 }
-                for (name, ty, comps, v) in found {
-                    if comps == 1 {
-                        scalars.push((ArrayInfo::new(&name, is_point, &ty), v));
-                    }
+                let comps = count_at(lx, &a, 1, "FIELD array")?;
+                let tuples = count_at(lx, &a, 2, "FIELD array")?;
+                let ty = a.get(3).cloned().unwrap_or_default();
+                let name = a[0].clone();
+                let v = lx.values(comps.saturating_mul(tuples), &ty, &name)?;
+                if tuples == n {
+                    found.push((name, ty, comps, v));
                 }
             }
-            "METADATA" => {
-                // Text block ended by a blank line.
-                while let Some(l) = lx.raw_line() {
-                    if l.is_empty() {
-                        break;
-                    }
-                }
-            }
-            _ => return Err(lx.err(format!("unexpected keyword {:?}", t[0]))),
+        }
+        "VECTORS" | "NORMALS" => {
+            lx.values(n.saturating_mul(3), t.get(2).map_or("", |s| s), kw)?;
+        }
+        "TENSORS" => {
+            lx.values(n.saturating_mul(9), t.get(2).map_or("", |s| s), kw)?;
+        }
+        "GLOBAL_IDS" | "PEDIGREE_IDS" => {
+            lx.values(n, t.get(2).map_or("", |s| s), kw)?;
+        }
+        "TEXTURE_COORDINATES" => {
+            let d = count_at(lx, t, 2, kw)?;
+            lx.values(n.saturating_mul(d), t.get(3).map_or("", |s| s), kw)?;
+        }
+        "COLOR_SCALARS" => {
+            let d = count_at(lx, t, 2, kw)?;
+            let ty = if lx.binary { "unsigned_char" } else { "float" };
+            lx.values(n.saturating_mul(d), ty, kw)?;
+        }
+        _ => {
+            // A standalone LOOKUP_TABLE name size: size RGBA entries.
+            let size = count_at(lx, t, 2, kw)?;
+            let ty = if lx.binary { "unsigned_char" } else { "float" };
+            lx.values(size.saturating_mul(4), ty, kw)?;
         }
     }
+    Ok(found)
+}
+
+/// The mesh from the points, the polygon and strip blocks (triangulated), and the label array
+/// chosen among the one-component `scalars` (`label_array`, or by name).
+fn assemble(
+    file: &str,
+    points: Vec<DVec3>,
+    blocks: &[Option<CellBlock>; 4],
+    mut scalars: Vec<(ArrayInfo, Vec<f64>)>,
+    label_array: Option<&str>,
+) -> Result<MeshFile> {
     check_vertex_count(file, points.len())?;
     check_finite(file, &points)?;
     let mut fb = FaceBuilder::new(file, points.len());
