@@ -65,77 +65,9 @@ pub fn repair_open_surface(
     let mut rep = RepairReport::default();
     let n = mesh.positions.len();
     // 1. Degenerate and duplicate faces.
-    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(mesh.triangles.len());
-    let mut seen: Vec<[u32; 3]> = Vec::new();
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        let bad_index = t.iter().any(|&v| v as usize >= n);
-        if bad_index
-            || t[0] == t[1]
-            || t[1] == t[2]
-            || t[0] == t[2]
-            || mesh.face_cross(f) == DVec3::ZERO
-        {
-            rep.degenerate_faces += 1;
-            continue;
-        }
-        let mut k = *t;
-        k.sort_unstable();
-        seen.push(k);
-        faces.push(*t);
-    }
-    // Sorted by (vertex set, face): the keys are distinct, so an unstable sort gives the
-    // stable order.
-    let mut order: Vec<([u32; 3], u32)> = seen
-        .iter()
-        .enumerate()
-        .map(|(i, &k)| (k, i as u32))
-        .collect();
-    sort_by_vertex(&mut order, n, |k| k.0[0]);
-    let mut dup = vec![false; faces.len()];
-    for w in order.windows(2) {
-        if w[0].0 == w[1].0 {
-            dup[w[1].1 as usize] = true;
-        }
-    }
-    rep.duplicate_faces = dup.iter().filter(|d| **d).count();
-    let faces: Vec<[u32; 3]> = faces
-        .into_iter()
-        .zip(dup)
-        .filter_map(|(t, d)| (!d).then_some(t))
-        .collect();
-    // 2. At most two faces per undirected edge (greedy in face order). Edge ids in sorted
-    // (min, max) order, one per face side.
-    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
-    {
-        let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(faces.len() * 3);
-        for (f, t) in faces.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                keyed.push((a.min(b), a.max(b), (3 * f + k) as u32));
-            }
-        }
-        sort_by_vertex(&mut keyed, n, |k| k.0);
-        let mut side_edge = vec![0u32; keyed.len()];
-        let mut edges = 0u32;
-        for (i, &(a, b, side)) in keyed.iter().enumerate() {
-            if i > 0 && (keyed[i - 1].0, keyed[i - 1].1) != (a, b) {
-                edges += 1;
-            }
-            side_edge[side as usize] = edges;
-        }
-        let mut edge_use = vec![0u8; edges as usize + 1];
-        for (f, t) in faces.iter().enumerate() {
-            let es = [side_edge[3 * f], side_edge[3 * f + 1], side_edge[3 * f + 2]];
-            if es.iter().any(|&e| edge_use[e as usize] >= 2) {
-                rep.non_manifold_faces += 1;
-                continue;
-            }
-            for e in es {
-                edge_use[e as usize] += 1;
-            }
-            kept.push(*t);
-        }
-    }
+    let faces = distinct_faces(mesh, &mut rep);
+    // 2. At most two faces per undirected edge (greedy in face order).
+    let kept = two_faces_per_edge(faces, n, &mut rep);
     let mut m = TriMesh::new(mesh.positions.clone(), kept);
     // 3. Largest component only. The edge topology is kept for the later steps while the
     // triangles stay exactly as they are (the usual clean crown).
@@ -182,46 +114,7 @@ pub fn repair_open_surface(
     }
     // 6. Fill small holes (every loop but the longest, up to the size limit).
     if opts.max_hole_fraction > 0.0 {
-        let loops = match &same_topo {
-            Some(topo) => boundary_loops_of(topo),
-            None => boundary_loops(&m),
-        };
-        let perims: Vec<f64> = loops
-            .iter()
-            .map(|l| {
-                (0..l.len())
-                    .map(|i| {
-                        (m.positions[l[i] as usize] - m.positions[l[(i + 1) % l.len()] as usize])
-                            .length()
-                    })
-                    .sum()
-            })
-            .collect();
-        // The margin: the longest loop (first of equals).
-        let margin =
-            (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
-        if let Some(mi) = margin {
-            for (i, l) in loops.iter().enumerate() {
-                if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
-                    continue;
-                }
-                let c = l
-                    .iter()
-                    .fold(DVec3::ZERO, |a, &v| a + m.positions[v as usize])
-                    / l.len() as f64;
-                let ci = m.positions.len() as u32;
-                m.positions.push(c);
-                source.push(u32::MAX);
-                // The loop runs with the surface on its left; the cap uses each boundary edge
-                // in the opposite direction.
-                for j in 0..l.len() {
-                    let (a, b) = (l[j], l[(j + 1) % l.len()]);
-                    m.triangles.push([b, a, ci]);
-                }
-                rep.filled_holes += 1;
-                rep.added_vertices += 1;
-            }
-        }
+        fill_small_holes(&mut m, &mut source, same_topo.as_ref(), opts, &mut rep);
     }
     // 7. Drop unused vertices, keeping the source map in step.
     let map = m.compact();
@@ -232,6 +125,138 @@ pub fn repair_open_surface(
         }
     }
     (m, new_source, rep)
+}
+
+/// Step 1 of [`repair_open_surface`]: the faces without an out-of-range index, a repeated
+/// vertex or a zero area, and of faces on the same three vertices the first; counted in `rep`.
+fn distinct_faces(mesh: &TriMesh, rep: &mut RepairReport) -> Vec<[u32; 3]> {
+    let n = mesh.positions.len();
+    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(mesh.triangles.len());
+    let mut seen: Vec<[u32; 3]> = Vec::new();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let bad_index = t.iter().any(|&v| v as usize >= n);
+        if bad_index
+            || t[0] == t[1]
+            || t[1] == t[2]
+            || t[0] == t[2]
+            || mesh.face_cross(f) == DVec3::ZERO
+        {
+            rep.degenerate_faces += 1;
+            continue;
+        }
+        let mut k = *t;
+        k.sort_unstable();
+        seen.push(k);
+        faces.push(*t);
+    }
+    // Sorted by (vertex set, face): the keys are distinct, so an unstable sort gives the
+    // stable order.
+    let mut order: Vec<([u32; 3], u32)> = seen
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k, i as u32))
+        .collect();
+    sort_by_vertex(&mut order, n, |k| k.0[0]);
+    let mut dup = vec![false; faces.len()];
+    for w in order.windows(2) {
+        if w[0].0 == w[1].0 {
+            dup[w[1].1 as usize] = true;
+        }
+    }
+    rep.duplicate_faces = dup.iter().filter(|d| **d).count();
+    faces
+        .into_iter()
+        .zip(dup)
+        .filter_map(|(t, d)| (!d).then_some(t))
+        .collect()
+}
+
+/// Step 2 of [`repair_open_surface`]: at most two faces per undirected edge, greedy in face
+/// order (a face that would be an edge's third goes, counted in `rep`). Edge ids in sorted
+/// (min, max) order, one per face side; `n` vertices.
+fn two_faces_per_edge(faces: Vec<[u32; 3]>, n: usize, rep: &mut RepairReport) -> Vec<[u32; 3]> {
+    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
+    let mut keyed: Vec<(u32, u32, u32)> = Vec::with_capacity(faces.len() * 3);
+    for (f, t) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            keyed.push((a.min(b), a.max(b), (3 * f + k) as u32));
+        }
+    }
+    sort_by_vertex(&mut keyed, n, |k| k.0);
+    let mut side_edge = vec![0u32; keyed.len()];
+    let mut edges = 0u32;
+    for (i, &(a, b, side)) in keyed.iter().enumerate() {
+        if i > 0 && (keyed[i - 1].0, keyed[i - 1].1) != (a, b) {
+            edges += 1;
+        }
+        side_edge[side as usize] = edges;
+    }
+    let mut edge_use = vec![0u8; edges as usize + 1];
+    for (f, t) in faces.iter().enumerate() {
+        let es = [side_edge[3 * f], side_edge[3 * f + 1], side_edge[3 * f + 2]];
+        if es.iter().any(|&e| edge_use[e as usize] >= 2) {
+            rep.non_manifold_faces += 1;
+            continue;
+        }
+        for e in es {
+            edge_use[e as usize] += 1;
+        }
+        kept.push(*t);
+    }
+    kept
+}
+
+/// Step 6 of [`repair_open_surface`]: every boundary loop but the longest (the margin) whose
+/// perimeter is at most `opts.max_hole_fraction` of the margin's is capped by a fan around a new
+/// vertex at its centroid (`source` gets `u32::MAX` for it); `same_topo` is `m`'s edge topology
+/// when still valid. Counted in `rep`.
+fn fill_small_holes(
+    m: &mut TriMesh,
+    source: &mut Vec<u32>,
+    same_topo: Option<&EdgeTopology>,
+    opts: &RepairOptions,
+    rep: &mut RepairReport,
+) {
+    let loops = match same_topo {
+        Some(topo) => boundary_loops_of(topo),
+        None => boundary_loops(m),
+    };
+    let perims: Vec<f64> = loops
+        .iter()
+        .map(|l| {
+            (0..l.len())
+                .map(|i| {
+                    (m.positions[l[i] as usize] - m.positions[l[(i + 1) % l.len()] as usize])
+                        .length()
+                })
+                .sum()
+        })
+        .collect();
+    // The margin: the longest loop (first of equals).
+    let margin = (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
+    if let Some(mi) = margin {
+        for (i, l) in loops.iter().enumerate() {
+            if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
+                continue;
+            }
+            let c = l
+                .iter()
+                .fold(DVec3::ZERO, |a, &v| a + m.positions[v as usize])
+                / l.len() as f64;
+            let ci = m.positions.len() as u32;
+            m.positions.push(c);
+            source.push(u32::MAX);
+            // The loop runs with the surface on its left; the cap uses each boundary edge
+            // in the opposite direction.
+            for j in 0..l.len() {
+                let (a, b) = (l[j], l[(j + 1) % l.len()]);
+                m.triangles.push([b, a, ci]);
+            }
+            rep.filled_holes += 1;
+            rep.added_vertices += 1;
+        }
+    }
 }
 
 /// Whether no directed edge is used by two faces. With at most two faces per undirected edge
