@@ -1,5 +1,6 @@
-//! The registration gate's scores on phantoms: each seed's own IOS and CBCT (valid) and the
-//! previous seed's IOS with this seed's CBCT (another patient). The figures of docs/errors.md.
+//! The registration gate's scores on phantoms: each seed's own IOS and CBCT (valid), the
+//! previous seed's IOS with this seed's CBCT (`other`) and this seed's IOS with the previous
+//! seed's CBCT (`other'`: another patient). The figures of docs/errors.md.
 //!
 //! `GATE_DEBUG=1` prints each whole report (`{:?}`, full precision) instead of the summary.
 //!
@@ -23,9 +24,12 @@ fn stats(g: &GateReport) -> String {
         .collect();
     r.sort_by(f64::total_cmp);
     format!(
-        "mismatch {:.3} fit {:.3} mir {:.3} shift {:.3} toothshift {:.3} rough {:.3} trans_med {:.3} trans_rough {:.3} gate {:.0}ms",
+        "mismatch {:.3} fit {:.3} offset {:.3} trans {:.3} refit {:.3} mir {:.3} shift {:.3} toothshift {:.3} rough {:.3} trans_med {:.3} trans_rough {:.3} gate {:.0}ms",
         g.mismatch,
         g.fit_mm,
+        g.surface_offset_mm,
+        g.tooth_translation_mm,
+        g.refit_mm,
         g.mirrored_fit_mm,
         g.shifted_fit_mm,
         g.tooth_shift_mm,
@@ -69,6 +73,15 @@ fn main() {
             && let Ok(r) = register(&q.ios_crowns(), &p.cbct, &o)
         {
             println!("{seed} other: {} t {:.0}", stats(&r.gate), r.timing.gate_ms);
+        }
+        if let Some(q) = &prev
+            && let Ok(r) = register(&p.ios_crowns(), &q.cbct, &o)
+        {
+            println!(
+                "{seed} other': {} t {:.0}",
+                stats(&r.gate),
+                r.timing.gate_ms
+            );
         }
         prev = Some(p);
     }
