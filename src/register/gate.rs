@@ -24,6 +24,9 @@
 //! differ. The jaw is refused when the median fit or the tooth motions are beyond what the same
 //! patient gives.
 
+mod handedness;
+mod verdict;
+
 use super::ToothData;
 use super::centroid::kabsch;
 use super::correspondence::SurfaceIndex;
@@ -31,7 +34,10 @@ use super::icp::{Normal7, Pair, step_about};
 use crate::arch::{arch_position, is_valid_fdi, jaw_of};
 use crate::{Error, Rigid};
 use glam::DVec3;
+use handedness::{ios_handedness, occlusal};
 use std::collections::BTreeMap;
+pub(crate) use verdict::wrong_jaw;
+use verdict::{jaw_verdict, misnumbered};
 
 /// Largest number of IOS points per tooth the gate's fits use (deterministic stride sample).
 const SAMPLE: usize = 150;
@@ -490,122 +496,6 @@ fn tooth_evidence(
     })
 }
 
-fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
-    // A short arch's nearly collinear teeth leave the quick fit's rotation about the arch line
-    // loose (the full registration restarts for that): its verdicts need a hypothesis that fits
-    // well, and the "does not match" verdict needs a long enough arch.
-    let long_arch = r.teeth.len() >= MIN_TEETH_FOR_MISMATCH;
-    // On a short arch with no evidence of the IOS's own handedness (teeth of one side only), a
-    // reflection of a few nearly collinear teeth can fit as well as the truth: no mirror verdict.
-    let mirror_decidable = long_arch || r.ios_handed_ok.is_some();
-    if mirror_decidable
-        && r.fit_mm > GOOD_FIT_MM
-        && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm
-        && r.mirrored_fit_mm < CLEAR_FIT_MM
-    {
-        let which = match r.ios_handed_ok {
-            Some(false) => {
-                "the IOS is mirrored (its crowns' occlusal side and its left and right teeth \
-                 contradict its FDI numbers)"
-            }
-            Some(true) => {
-                "the CBCT is mirrored (the IOS crowns' occlusal side and left and right teeth \
-                 agree with their FDI numbers)"
-            }
-            None => "one of them is mirrored",
-        };
-        return Some(Error::Mirrored(format!(
-            "{which}: the IOS fits the CBCT with a median distance of {:.2} mm as given but \
-             {:.2} mm when reflected; an x -> -x flip or an LPS/RAS conversion was applied to one \
-             modality only",
-            r.fit_mm, r.mirrored_fit_mm
-        )));
-    }
-    if r.fit_mm > GOOD_FIT_MM
-        && r.shifted_fit_mm < BETTER * r.fit_mm
-        && r.shifted_fit_mm < CLEAR_FIT_MM
-    {
-        return Some(Error::RegistrationRejected(format!(
-            "labels shifted by one tooth along the arch: the IOS crowns fit the CBCT teeth one \
-             position {} with a median distance of {:.2} mm, but {:.2} mm with the labels as \
-             given; renumber the IOS (or CBCT) teeth",
-            if shift_step > 0 {
-                "further left"
-            } else {
-                "further right"
-            },
-            r.shifted_fit_mm,
-            r.fit_mm
-        )));
-    }
-    if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
-        return Some(Error::RegistrationRejected(format!(
-            "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
-             crowns lie a median {:.2} mm from their CBCT teeth and each tooth fitted alone moves across its axis \
-             a median {:.2} mm (mismatch score {:.2}; the same patient's scans score below 2.2 \
-             on the phantom, refused above {MAX_MISMATCH}); check that both scans are of this patient",
-            r.fit_mm, r.tooth_translation_mm, r.mismatch
-        )));
-    }
-    None
-}
-
-/// Teeth whose IOS crown lies on another CBCT tooth, with the reason.
-fn misnumbered(r: &GateReport) -> Vec<(u8, String)> {
-    let on_other: BTreeMap<u8, (u8, f64, f64)> = r
-        .teeth
-        .iter()
-        .filter_map(|e| {
-            let (o, d) = e.best_other?;
-            (e.own_fit_mm > TOOTH_MISFIT_MM && d < BETTER * e.own_fit_mm)
-                .then_some((e.fdi, (o, d, e.own_fit_mm)))
-        })
-        .collect();
-    on_other
-        .iter()
-        .map(|(&f, &(o, d, own))| {
-            let swapped = on_other.get(&o).is_some_and(|x| x.0 == f);
-            let why = if swapped {
-                format!("the IOS labels {f} and {o} look swapped")
-            } else {
-                "the IOS label looks wrong".to_string()
-            };
-            (
-                f,
-                format!(
-                    "misnumbered: the IOS crown labelled {f} lies on CBCT tooth {o} (median \
-                     distance {d:.2} mm) rather than on CBCT tooth {f} ({own:.2} mm): {why}; \
-                     tooth not fused"
-                ),
-            )
-        })
-        .collect()
-}
-
-/// The error for IOS and CBCT teeth from different jaws, if that is the case.
-pub(crate) fn wrong_jaw(ios: &[u8], cbct: &[u8]) -> Option<Error> {
-    let jaws = |v: &[u8]| {
-        let mut j: Vec<_> = v.iter().map(|&f| jaw_of(f)).collect();
-        j.sort();
-        j.dedup();
-        j
-    };
-    let (ji, jc) = (jaws(ios), jaws(cbct));
-    if ji.len() == 1 && jc.len() == 1 && ji != jc {
-        let name = |j: crate::arch::Jaw| match j {
-            crate::arch::Jaw::Upper => "upper",
-            crate::arch::Jaw::Lower => "lower",
-        };
-        return Some(Error::RegistrationRejected(format!(
-            "wrong jaw: the IOS teeth are of the {} jaw, the CBCT teeth of the {} jaw; give \
-             both modalities of the same jaw",
-            name(ji[0]),
-            name(jc[0])
-        )));
-    }
-    None
-}
-
 /// Median over interior teeth (in arch order) of the largest departure of a tooth's own motion
 /// from the mean of its neighbours' (mm).
 fn roughness(ev: &[ToothEvidence]) -> f64 {
@@ -623,53 +513,4 @@ fn roughness(ev: &[ToothEvidence]) -> f64 {
             })
             .collect(),
     )
-}
-
-/// The handedness of the IOS crowns from their own geometry: the occlusal direction (from each
-/// crown's margin to its centroid), the patient's right-to-left direction (FDI sides) and the
-/// front-to-back direction (incisors and canines vs premolars and molars) form a right- or
-/// left-handed frame, fixed by anatomy for each jaw. `None` without teeth on both sides and both
-/// in front and behind, or without margins.
-pub(crate) fn ios_handedness(teeth: &BTreeMap<u8, ToothData>) -> Option<bool> {
-    let mut up = DVec3::ZERO;
-    let (mut right, mut left, mut front, mut back) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (&f, d) in teeth {
-        up += occlusal(d)?;
-        let c = d.ios_centroid;
-        if arch_position(f) < 0 {
-            right.push(c)
-        } else {
-            left.push(c)
-        }
-        if f % 10 <= 3 {
-            front.push(c)
-        } else {
-            back.push(c)
-        }
-    }
-    if [&right, &left, &front, &back].iter().any(|v| v.is_empty()) || up == DVec3::ZERO {
-        return None;
-    }
-    let r = mean(&right) - mean(&left);
-    let fwd = mean(&front) - mean(&back);
-    let s = r.cross(fwd).dot(up.normalize());
-    let upper = teeth
-        .keys()
-        .next()
-        .is_some_and(|&f| jaw_of(f) == crate::arch::Jaw::Upper);
-    Some((s > 0.0) == upper)
-}
-
-/// The occlusal direction of an IOS crown (unit, IOS frame): from the centroid of its margin (its
-/// longest boundary loop) to its centroid. `None` for a closed crown.
-fn occlusal(d: &ToothData) -> Option<DVec3> {
-    let loops = crate::mesh::boundary_loops(&d.ios_mesh);
-    let rim = loops.iter().max_by_key(|l| l.len())?;
-    let b = mean(
-        &rim.iter()
-            .map(|&v| d.ios_mesh.positions[v as usize])
-            .collect::<Vec<_>>(),
-    );
-    Some((d.ios_centroid - b).normalize_or_zero())
 }

@@ -1,0 +1,128 @@
+//! The gate's verdicts from its measures: the jaw refused (mirrored, labels shifted, another
+//! patient, the other jaw) and the misnumbered teeth.
+
+use super::{
+    BETTER, CLEAR_FIT_MM, GOOD_FIT_MM, GateReport, MAX_JAW_FIT_MM, MAX_MISMATCH,
+    MIN_TEETH_FOR_MISMATCH, MIRROR_BETTER, TOOTH_MISFIT_MM,
+};
+use crate::Error;
+use crate::arch::jaw_of;
+use std::collections::BTreeMap;
+
+/// The jaw-level verdict from the gate's measures: mirrored, labels shifted, or another
+/// patient (the first that holds), if any.
+pub(super) fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
+    // A short arch's nearly collinear teeth leave the quick fit's rotation about the arch line
+    // loose (the full registration restarts for that): its verdicts need a hypothesis that fits
+    // well, and the "does not match" verdict needs a long enough arch.
+    let long_arch = r.teeth.len() >= MIN_TEETH_FOR_MISMATCH;
+    // On a short arch with no evidence of the IOS's own handedness (teeth of one side only), a
+    // reflection of a few nearly collinear teeth can fit as well as the truth: no mirror verdict.
+    let mirror_decidable = long_arch || r.ios_handed_ok.is_some();
+    if mirror_decidable
+        && r.fit_mm > GOOD_FIT_MM
+        && r.mirrored_fit_mm < MIRROR_BETTER * r.fit_mm
+        && r.mirrored_fit_mm < CLEAR_FIT_MM
+    {
+        let which = match r.ios_handed_ok {
+            Some(false) => {
+                "the IOS is mirrored (its crowns' occlusal side and its left and right teeth \
+                 contradict its FDI numbers)"
+            }
+            Some(true) => {
+                "the CBCT is mirrored (the IOS crowns' occlusal side and left and right teeth \
+                 agree with their FDI numbers)"
+            }
+            None => "one of them is mirrored",
+        };
+        return Some(Error::Mirrored(format!(
+            "{which}: the IOS fits the CBCT with a median distance of {:.2} mm as given but \
+             {:.2} mm when reflected; an x -> -x flip or an LPS/RAS conversion was applied to one \
+             modality only",
+            r.fit_mm, r.mirrored_fit_mm
+        )));
+    }
+    if r.fit_mm > GOOD_FIT_MM
+        && r.shifted_fit_mm < BETTER * r.fit_mm
+        && r.shifted_fit_mm < CLEAR_FIT_MM
+    {
+        return Some(Error::RegistrationRejected(format!(
+            "labels shifted by one tooth along the arch: the IOS crowns fit the CBCT teeth one \
+             position {} with a median distance of {:.2} mm, but {:.2} mm with the labels as \
+             given; renumber the IOS (or CBCT) teeth",
+            if shift_step > 0 {
+                "further left"
+            } else {
+                "further right"
+            },
+            r.shifted_fit_mm,
+            r.fit_mm
+        )));
+    }
+    if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
+        return Some(Error::RegistrationRejected(format!(
+            "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
+             crowns lie a median {:.2} mm from their CBCT teeth and each tooth fitted alone moves across its axis \
+             a median {:.2} mm (mismatch score {:.2}; the same patient's scans score below 2.2 \
+             on the phantom, refused above {MAX_MISMATCH}); check that both scans are of this patient",
+            r.fit_mm, r.tooth_translation_mm, r.mismatch
+        )));
+    }
+    None
+}
+
+/// Teeth whose IOS crown lies on another CBCT tooth, with the reason.
+pub(super) fn misnumbered(r: &GateReport) -> Vec<(u8, String)> {
+    let on_other: BTreeMap<u8, (u8, f64, f64)> = r
+        .teeth
+        .iter()
+        .filter_map(|e| {
+            let (o, d) = e.best_other?;
+            (e.own_fit_mm > TOOTH_MISFIT_MM && d < BETTER * e.own_fit_mm)
+                .then_some((e.fdi, (o, d, e.own_fit_mm)))
+        })
+        .collect();
+    on_other
+        .iter()
+        .map(|(&f, &(o, d, own))| {
+            let swapped = on_other.get(&o).is_some_and(|x| x.0 == f);
+            let why = if swapped {
+                format!("the IOS labels {f} and {o} look swapped")
+            } else {
+                "the IOS label looks wrong".to_string()
+            };
+            (
+                f,
+                format!(
+                    "misnumbered: the IOS crown labelled {f} lies on CBCT tooth {o} (median \
+                     distance {d:.2} mm) rather than on CBCT tooth {f} ({own:.2} mm): {why}; \
+                     tooth not fused"
+                ),
+            )
+        })
+        .collect()
+}
+
+/// The error for IOS and CBCT teeth from different jaws, if that is the case.
+pub(crate) fn wrong_jaw(ios: &[u8], cbct: &[u8]) -> Option<Error> {
+    let jaws = |v: &[u8]| {
+        let mut j: Vec<_> = v.iter().map(|&f| jaw_of(f)).collect();
+        j.sort();
+        j.dedup();
+        j
+    };
+    let (ji, jc) = (jaws(ios), jaws(cbct));
+    if ji.len() == 1 && jc.len() == 1 && ji != jc {
+        let name = |j: crate::arch::Jaw| match j {
+            crate::arch::Jaw::Upper => "upper",
+            crate::arch::Jaw::Lower => "lower",
+        };
+        return Some(Error::RegistrationRejected(format!(
+            "wrong jaw: the IOS teeth are of the {} jaw, the CBCT teeth of the {} jaw; give \
+             both modalities of the same jaw",
+            name(ji[0]),
+            name(jc[0])
+        )));
+    }
+    None
+}
