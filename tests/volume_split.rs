@@ -52,6 +52,16 @@ fn lower() -> Option<(Phantom, LabelVolume)> {
         .clone()
 }
 
+/// Every tooth label of `v` surfaced (FDI numbering, default surfacing), by FDI.
+fn surfaced(v: &LabelVolume) -> BTreeMap<u8, TriMesh> {
+    surface_teeth(v, VolumeScheme::Fdi, &SurfaceOptions::default())
+        .unwrap()
+        .teeth
+        .into_iter()
+        .map(|(f, t)| (f, t.mesh))
+        .collect()
+}
+
 /// Mean TRE (mm) over the fused teeth, the number fused, and whether all are watertight.
 fn fuse_and_measure(p: &Phantom, cbct: BTreeMap<u8, TriMesh>, what: &str) -> (f64, usize, bool) {
     fuse_gated(p, cbct, what).0
@@ -399,16 +409,10 @@ fn per_jaw_mask_split_by_the_ios_fuses_every_tooth() {
     let again = split_teeth(&merged, &crowns, &SplitOptions::default()).unwrap();
     assert_eq!(again.volume, split.volume);
     // Fused from the split teeth and from the per-tooth volume.
-    let surf = |v: &LabelVolume| -> BTreeMap<u8, TriMesh> {
-        surface_teeth(v, VolumeScheme::Fdi, &SurfaceOptions::default())
-            .unwrap()
-            .teeth
-            .into_iter()
-            .map(|(f, t)| (f, t.mesh))
-            .collect()
-    };
-    let (tre_tooth, n_tooth, wt_tooth) = fuse_and_measure(&p, surf(&placed), "per-tooth volume");
-    let (tre_split, n_split, wt_split) = fuse_and_measure(&p, surf(&split.volume), "split volume");
+    let (tre_tooth, n_tooth, wt_tooth) =
+        fuse_and_measure(&p, surfaced(&placed), "per-tooth volume");
+    let (tre_split, n_split, wt_split) =
+        fuse_and_measure(&p, surfaced(&split.volume), "split volume");
     eprintln!(
         "mean TRE: per-tooth volume {tre_tooth:.3} mm ({n_tooth} teeth), split per-jaw mask \
          {tre_split:.3} mm ({n_split} teeth)"
@@ -695,16 +699,8 @@ fn split_degraded(p: &Phantom, truth: &LabelVolume, what: &str) -> Degraded {
     for line in split.summary() {
         eprintln!("{what}: {line}");
     }
-    let surf = |v: &LabelVolume| -> BTreeMap<u8, TriMesh> {
-        surface_teeth(v, VolumeScheme::Fdi, &SurfaceOptions::default())
-            .unwrap()
-            .teeth
-            .into_iter()
-            .map(|(f, t)| (f, t.mesh))
-            .collect()
-    };
-    let tooth = fuse_gated(p, surf(truth), &format!("{what}, per tooth"));
-    let split_fused = fuse_gated(p, surf(&split.volume), &format!("{what}, split"));
+    let tooth = fuse_gated(p, surfaced(truth), &format!("{what}, per tooth"));
+    let split_fused = fuse_gated(p, surfaced(&split.volume), &format!("{what}, split"));
     let d = Degraded {
         inlier_share: fit.inlier_share,
         rms_mm: fit.rms_mm,
