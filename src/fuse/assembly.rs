@@ -94,7 +94,9 @@ fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
         return Vec::new();
     };
     let is_crown = |f: u32| (f as usize) < a.band.start;
-    let mut out = Vec::new();
+    // The margin edges (both corners crown vertices) of the band faces that cross a crown face,
+    // each with that crown face `g`, keyed by the edge's sorted corners.
+    let mut edges: Vec<((u32, u32), u32)> = Vec::new();
     for &(f, g) in &u.crossing_pairs {
         let (band_face, g) = match (is_crown(f), is_crown(g)) {
             (false, true) => (f, g),
@@ -107,16 +109,27 @@ fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
         let t = a.mesh.triangles[band_face as usize];
         for k in 0..3 {
             let (p, q) = (t[k], t[(k + 1) % 3]);
-            if (p as usize) >= crown_vertices || (q as usize) >= crown_vertices {
-                continue;
+            if (p as usize) < crown_vertices && (q as usize) < crown_vertices {
+                edges.push(((p.min(q), p.max(q)), g));
             }
-            out.extend((0..a.band.start as u32).filter(|&c| {
-                let ct = a.mesh.triangles[c as usize];
-                c != g
-                    && ct.contains(&p)
-                    && ct.contains(&q)
-                    && crate::mesh_check::triangles_intersect(&a.mesh, c as usize, g as usize)
-            }));
+        }
+    }
+    if edges.is_empty() {
+        return Vec::new();
+    }
+    edges.sort_unstable();
+    // One pass over the crown faces: those on one of the edges that cross its `g` too.
+    let mut out = Vec::new();
+    for (c, ct) in a.mesh.triangles[..a.band.start].iter().enumerate() {
+        for k in 0..3 {
+            let (p, q) = (ct[k], ct[(k + 1) % 3]);
+            let key = (p.min(q), p.max(q));
+            let from = edges.partition_point(|e| e.0 < key);
+            for &(_, g) in edges[from..].iter().take_while(|e| e.0 == key) {
+                if c as u32 != g && crate::mesh_check::triangles_intersect(&a.mesh, c, g as usize) {
+                    out.push(c as u32);
+                }
+            }
         }
     }
     out
@@ -155,15 +168,15 @@ fn build_attempts(
     let mut best: Option<(Assembled, super::fringe::FringeTrim, CrownSide)> = None;
     for attempt in 1..=MAX_ATTEMPTS {
         let a = assemble(ct, &side, opts)?;
-        let (hits, pierced) = if crossings_left(&a) > 0 {
-            let hits = crown_faces_hit(&a, side.crown.positions.len(), attempt > 2);
-            let mut more = hits.clone();
-            more.extend(pierced_margin_faces(&a, side.crown.positions.len()));
-            more.sort_unstable();
-            more.dedup();
-            (hits, more)
+        let hits = if crossings_left(&a) > 0 {
+            crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
         } else {
-            (Vec::new(), Vec::new())
+            Vec::new()
+        };
+        let next = if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
+            None
+        } else {
+            retrim(ct, &side, &a, &hits, opts.fringe_reach_mm)
         };
         if best
             .as_ref()
@@ -171,37 +184,52 @@ fn build_attempts(
         {
             best = Some((a, trimmed, side.clone()));
         }
-        if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
-            break;
-        }
-        // Only where nothing within the reach can go: a crossed face whose apex lies beyond it.
-        // Only where neither can go, the same with the crown faces whose margin edge pierces a
-        // crossed face listed too; and last, listed faces on a margin edge whatever the reach
-        // of their corners (none of them is lost: the margin moves, no vertex goes).
-        let trim = |listed: &[u32], mode| {
-            super::fringe::trim_fringe(
-                &side.crown,
-                &side.ios_vertex,
-                &ct.dist_in,
-                opts.fringe_reach_mm,
-                listed,
-                mode,
-            )
-        };
-        let mut r = trim(&hits, Listed::Within).or_else(|| trim(&hits, Listed::Apex));
-        if r.is_none() && pierced.len() > hits.len() {
-            r = trim(&pierced, Listed::Within).or_else(|| trim(&pierced, Listed::Apex));
-        }
-        if r.is_none() {
-            r = trim(&pierced, Listed::MarginEdge);
-        }
-        let Some((crown, map, t)) = r else {
+        let Some((crown, map, t)) = next else {
             break;
         };
         add_trim(&mut trimmed, &t);
         side = trimmed_side(ct, crown, map);
     }
     Ok(best.expect("at least one attempt"))
+}
+
+/// The trim of `side`'s crown for a build `a` that left the crown faces `hits` crossed: the
+/// crossed faces within the reach; only where nothing within the reach can go, a crossed face
+/// whose apex lies beyond it; only where neither can go, the same with the crown faces whose
+/// margin edge pierces a crossed face listed too ([`pierced_margin_faces`], looked for only
+/// then); and last, listed faces on a margin edge whatever the reach of their corners (none of
+/// them is lost: the margin moves, no vertex goes). `None` when nothing can go.
+fn retrim(
+    ct: &CutTooth,
+    side: &CrownSide,
+    a: &Assembled,
+    hits: &[u32],
+    reach: f64,
+) -> Option<(TriMesh, Vec<u32>, super::fringe::FringeTrim)> {
+    let trim = |listed: &[u32], mode| {
+        super::fringe::trim_fringe(
+            &side.crown,
+            &side.ios_vertex,
+            &ct.dist_in,
+            reach,
+            listed,
+            mode,
+        )
+    };
+    let r = trim(hits, Listed::Within).or_else(|| trim(hits, Listed::Apex));
+    if r.is_some() {
+        return r;
+    }
+    let mut pierced = hits.to_vec();
+    pierced.extend(pierced_margin_faces(a, side.crown.positions.len()));
+    pierced.sort_unstable();
+    pierced.dedup();
+    let r = if pierced.len() > hits.len() {
+        trim(&pierced, Listed::Within).or_else(|| trim(&pierced, Listed::Apex))
+    } else {
+        None
+    };
+    r.or_else(|| trim(&pierced, Listed::MarginEdge))
 }
 
 /// After the builds, for a kept build still crossed: its crown loses only the faces on its
