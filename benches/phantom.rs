@@ -18,7 +18,7 @@ fn bench_phantom(c: &mut Criterion) {
             ..Default::default()
         };
         g.bench_function(format!("generate_full_{jaw:?}").to_lowercase(), |b| {
-            b.iter(|| black_box(Phantom::generate(black_box(&opts)).expect("phantom")))
+            b.iter(|| black_box(Phantom::generate_uncached(black_box(&opts)).expect("phantom")))
         });
     }
     let mut rough = PhantomOptions {
@@ -29,7 +29,7 @@ fn bench_phantom(c: &mut Criterion) {
     };
     rough.realism.ios.rough = IosExport::Rough.roughness();
     g.bench_function("generate_full_upper_rough", |b| {
-        b.iter(|| black_box(Phantom::generate(black_box(&rough)).expect("phantom")))
+        b.iter(|| black_box(Phantom::generate_uncached(black_box(&rough)).expect("phantom")))
     });
     g.finish();
 }

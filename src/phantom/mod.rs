@@ -83,6 +83,7 @@
 //!   --ios-export E`, user time): clean 4.2 s, rough 3.5 s (no relaxation, no crown cleaning),
 //!   coarse 1.6 s, dense2 5.8 s, dense4 10.9 s, subdivided 6.1 s.
 
+mod cache;
 mod cbct;
 mod crown_clean;
 mod crown_topology;
@@ -102,6 +103,7 @@ mod shape;
 mod surface_nets;
 mod voxelize;
 
+pub use cache::CACHE_ENV;
 pub use cbct::CbctRealism;
 pub use grid::Grid;
 pub use ios::IosRealism;
@@ -280,8 +282,16 @@ impl ToothTruth {
 }
 
 impl Phantom {
-    /// Generates a phantom. Deterministic in `opts`.
+    /// Generates a phantom. Deterministic in `opts`. With the environment variable
+    /// [`CACHE_ENV`] (`TOOTHFUSE_PHANTOM_CACHE`) naming a directory, a jaw made before from the
+    /// same options by the same library source is read from there instead, bit for bit the
+    /// generated one (the test command sets it so that its test executables share jaws).
     pub fn generate(opts: &PhantomOptions) -> Result<Phantom> {
+        cache::cached(opts, || generate::generate(opts))
+    }
+
+    /// Generates a phantom, never reading nor writing the cache of [`Phantom::generate`].
+    pub fn generate_uncached(opts: &PhantomOptions) -> Result<Phantom> {
         generate::generate(opts)
     }
 
