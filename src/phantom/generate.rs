@@ -8,9 +8,9 @@ use super::layout::{PlacedTooth, contact, jaw_teeth, layout};
 use super::project::{mesh_implicit, project};
 use super::rng::Rng;
 use super::{Phantom, PhantomOptions, ToothTruth, Truth, Variant};
-use crate::Result;
 use crate::arch::{Jaw, ToothType, arch_position, tooth_type};
 use crate::mesh::{LabeledMesh, TriMesh};
+use crate::{Result, Rigid};
 use glam::DVec3;
 use std::collections::BTreeMap;
 
@@ -112,10 +112,11 @@ fn touching(teeth: &[&PlacedTooth]) -> Vec<(usize, usize, DVec3)> {
     out
 }
 
-pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
-    let root = Rng::new(opts.seed);
+/// The phantom's teeth and where each modality holds them: the scenario drawn for the variant,
+/// the teeth placed (parametric, or the caller's anatomy) in arch order, and the map from the
+/// caller's world frame to the canonical jaw frame the simulation works in.
+fn arrange(opts: &PhantomOptions, root: &Rng) -> Result<(Scenario, Vec<PlacedTooth>, Rigid)> {
     let jaw = opts.jaw;
-    let realism = &opts.realism;
     let mut srng = root.fork(2);
     // Real anatomy is simulated in a canonical jaw frame (occlusal direction ±Z); `canon` maps
     // the caller's world frame to it (identity for parametric teeth).
@@ -144,8 +145,21 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
         ),
     };
     teeth.sort_by_key(|t| arch_position(t.shape.fdi));
+    Ok((sc, teeth, canon))
+}
 
-    // Drift along the scan path and the two scanner frames.
+/// The scanner frames of a phantom: per tooth the IOS stitching drift, the two scanner poses and
+/// the occlusal direction.
+struct Frames {
+    drift: Vec<Rigid>,
+    world_to_ios: Rigid,
+    world_to_cbct: Rigid,
+    occ: DVec3,
+}
+
+/// Draws the drift along the scan path and the two scanner frames.
+fn frames(opts: &PhantomOptions, teeth: &[PlacedTooth], root: &Rng) -> Frames {
+    let realism = &opts.realism;
     let mut drng = root.fork(3);
     let heavy = if opts.variant == Variant::HeavyDrift {
         realism.heavy_drift_factor
@@ -162,13 +176,29 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
     let mut prng = root.fork(4);
     let world_to_ios = random_pose(&mut prng, 40.0);
     let world_to_cbct = random_pose(&mut prng, 40.0);
-    let occ = if jaw == Jaw::Upper {
+    let occ = if opts.jaw == Jaw::Upper {
         -DVec3::Z
     } else {
         DVec3::Z
     };
+    Frames {
+        drift,
+        world_to_ios,
+        world_to_cbct,
+        occ,
+    }
+}
 
-    // IOS.
+/// The IOS jaw mesh (IOS frame, per-vertex labels) and per IOS tooth its true margin (world).
+fn simulate_ios(
+    opts: &PhantomOptions,
+    sc: &Scenario,
+    teeth: &[PlacedTooth],
+    f: &Frames,
+    root: &Rng,
+) -> (LabeledMesh, BTreeMap<u8, Vec<DVec3>>) {
+    let realism = &opts.realism;
+    let (drift, occ) = (&f.drift, f.occ);
     let mut irng = root.fork(5);
     let ios_idx: Vec<usize> = (0..teeth.len())
         .filter(|&i| sc.in_ios.contains(&teeth[i].shape.fdi))
@@ -212,15 +242,26 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
                 m.into_iter().map(|p| back.apply(p)).collect(),
             );
         }
-        mesh.transform(&world_to_ios);
+        mesh.transform(&f.world_to_ios);
         LabeledMesh {
             mesh,
             vertex_labels: Some(labels),
             face_labels: None,
         }
     };
+    (ios, margins)
+}
 
-    // CBCT.
+/// The CBCT teeth (CBCT frame), each simulated on its own in parallel.
+fn simulate_cbct(
+    opts: &PhantomOptions,
+    sc: &Scenario,
+    teeth: &[PlacedTooth],
+    f: &Frames,
+    root: &Rng,
+) -> Result<BTreeMap<u8, TriMesh>> {
+    let realism = &opts.realism;
+    let occ = f.occ;
     let mut crng = root.fork(6);
     let distortion = Distortion::new(&mut crng, realism.cbct.distortion);
     let cbct_idx: Vec<usize> = (0..teeth.len())
@@ -262,7 +303,7 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             biases[k],
             metal.as_ref(),
             &neighbours,
-            &world_to_cbct,
+            &f.world_to_cbct,
             &distortion,
             &realism.cbct,
             &mut trng,
@@ -280,11 +321,24 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
         }
         cbct.insert(fdi, m);
     }
+    Ok(cbct)
+}
 
-    // Truth.
+/// The ground truth: per tooth its true surface, margin, axis and mappings, in the caller's
+/// world frame.
+fn truth(
+    opts: &PhantomOptions,
+    sc: &Scenario,
+    teeth: &[PlacedTooth],
+    f: &Frames,
+    canon: Rigid,
+    mut margins: BTreeMap<u8, Vec<DVec3>>,
+) -> Truth {
+    let realism = &opts.realism;
+    let (drift, world_to_ios, world_to_cbct) = (&f.drift, f.world_to_ios, f.world_to_cbct);
     // Real anatomy: the caller's mesh, where it was; parametric: our mesh of the implicit (each
     // tooth on its own, in parallel).
-    let surfaces = crate::par::map_ordered(&teeth, |t| match &opts.anatomy {
+    let surfaces = crate::par::map_ordered(teeth, |t| match &opts.anatomy {
         Some(a) => a[&t.shape.fdi].clone(),
         None => true_surface(t, realism.truth_spacing),
     });
@@ -315,14 +369,24 @@ pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
             },
         );
     }
+    Truth {
+        teeth: truth_teeth,
+        world_to_ios: world_to_ios.compose(&canon),
+        world_to_cbct: world_to_cbct.compose(&canon),
+    }
+}
+
+pub(super) fn generate(opts: &PhantomOptions) -> Result<Phantom> {
+    let root = Rng::new(opts.seed);
+    let (sc, teeth, canon) = arrange(opts, &root)?;
+    let frames = frames(opts, &teeth, &root);
+    let (ios, margins) = simulate_ios(opts, &sc, &teeth, &frames, &root);
+    let cbct = simulate_cbct(opts, &sc, &teeth, &frames, &root)?;
+    let truth = truth(opts, &sc, &teeth, &frames, canon, margins);
     Ok(Phantom {
-        jaw,
+        jaw: opts.jaw,
         ios,
         cbct,
-        truth: Truth {
-            teeth: truth_teeth,
-            world_to_ios: world_to_ios.compose(&canon),
-            world_to_cbct: world_to_cbct.compose(&canon),
-        },
+        truth,
     })
 }

@@ -127,201 +127,21 @@ impl ToothShape {
             ToothType::Canine => 0.42 * crown_height,
             _ => 0.36 * crown_height,
         };
-        let mut cusps = Vec::new();
-        let mut grooves = Vec::new();
-        let (exponent, cervical, occl_md, occl_bl, table, edge_round, incisal);
-        let top = crown_height;
-        match ty {
-            ToothType::Incisor => {
-                exponent = 2.3;
-                cervical = 0.70;
-                occl_md = 0.92;
-                occl_bl = 0.22;
-                table = top;
-                edge_round = 0.6;
-                incisal = true;
-                // Mamelons: three tiny lobes on the incisal edge.
-                for k in [-1.0, 0.0, 1.0] {
-                    cusps.push(Cusp {
-                        x: k * 0.55 * a,
-                        y: 0.0,
-                        height: 0.15,
-                        radius: 0.35 * a,
-                    });
-                }
-            }
-            ToothType::Canine => {
-                exponent = 2.2;
-                cervical = 0.68;
-                occl_md = 0.80;
-                occl_bl = 0.45;
-                table = top - 2.2;
-                edge_round = 0.8;
-                incisal = false;
-                cusps.push(Cusp {
-                    x: -0.08 * a,
-                    y: 0.1 * b,
-                    height: 2.4,
-                    radius: 0.55 * a,
-                });
-            }
-            ToothType::Premolar => {
-                exponent = 2.4;
-                cervical = 0.70;
-                occl_md = 0.82;
-                occl_bl = 0.80;
-                table = top - 2.0;
-                edge_round = 0.9;
-                incisal = false;
-                let lingual = if jaw == Jaw::Lower { 0.9 } else { 1.6 };
-                cusps.push(Cusp {
-                    x: 0.0,
-                    y: 0.42 * b,
-                    height: 2.0,
-                    radius: 0.42 * a,
-                });
-                cusps.push(Cusp {
-                    x: 0.0,
-                    y: -0.45 * b,
-                    height: lingual,
-                    radius: 0.40 * a,
-                });
-                grooves.push(Groove {
-                    a: (-0.6 * a, 0.0),
-                    b: (0.6 * a, 0.0),
-                    depth: 0.7,
-                    width: 0.35,
-                });
-            }
-            ToothType::Molar => {
-                exponent = 2.8;
-                cervical = 0.74;
-                occl_md = 0.84;
-                occl_bl = 0.80;
-                table = top - 2.2;
-                edge_round = 1.0;
-                incisal = false;
-                let pts: &[(f64, f64, f64)] = if jaw == Jaw::Upper {
-                    &[
-                        (-0.45, 0.45, 2.0),
-                        (0.45, 0.45, 1.8),
-                        (-0.40, -0.45, 2.2),
-                        (0.45, -0.50, 1.4),
-                    ]
-                } else {
-                    &[
-                        (-0.55, 0.45, 2.0),
-                        (0.05, 0.50, 1.9),
-                        (0.62, 0.30, 1.5),
-                        (-0.45, -0.45, 2.2),
-                        (0.40, -0.45, 2.1),
-                    ]
-                };
-                for &(x, y, h) in pts {
-                    cusps.push(Cusp {
-                        x: x * a,
-                        y: y * b,
-                        height: h * rng.range(0.9, 1.1),
-                        radius: 0.34 * a.min(b) * 1.2,
-                    });
-                }
-                grooves.push(Groove {
-                    a: (-0.75 * a, 0.0),
-                    b: (0.75 * a, 0.0),
-                    depth: 0.8,
-                    width: 0.35,
-                });
-                grooves.push(Groove {
-                    a: (-0.15 * a, 0.0),
-                    b: (-0.25 * a, 0.9 * b),
-                    depth: 0.6,
-                    width: 0.3,
-                });
-                grooves.push(Groove {
-                    a: (0.15 * a, 0.0),
-                    b: (0.25 * a, -0.9 * b),
-                    depth: 0.6,
-                    width: 0.3,
-                });
-            }
-        }
+        let CrownForm {
+            exponent,
+            cervical,
+            occl_md,
+            occl_bl,
+            table,
+            edge_round,
+            incisal,
+            cusps,
+            grooves,
+        } = crown_form(ty, jaw, crown_height, (a, b), rng);
         // Roots.
         let (ca, cb) = (a * cervical, b * cervical);
-        let l = root_length;
         let distal_curve = rng.range(0.4, 1.2);
-        let mut roots = Vec::new();
-        let mut root = |top: DVec3, apex: DVec3, r_top: f64, aspect: f64| {
-            roots.push(Root {
-                top,
-                apex,
-                r_top,
-                r_apex: 0.45,
-                aspect,
-            })
-        };
-        let z0 = 1.0;
-        match (ty, jaw) {
-            (ToothType::Molar, Jaw::Upper) => {
-                let r = 0.42 * ca.min(cb);
-                root(
-                    DVec3::new(-0.45 * ca, 0.45 * cb, z0),
-                    DVec3::new(-0.6 * ca + distal_curve, 0.6 * cb, -l * 0.92),
-                    r,
-                    1.0,
-                );
-                root(
-                    DVec3::new(0.45 * ca, 0.45 * cb, z0),
-                    DVec3::new(0.7 * ca + distal_curve, 0.5 * cb, -l * 0.88),
-                    r,
-                    1.0,
-                );
-                root(
-                    DVec3::new(0.0, -0.45 * cb, z0),
-                    DVec3::new(distal_curve * 0.5, -0.9 * cb, -l),
-                    r * 1.15,
-                    1.0,
-                );
-            }
-            (ToothType::Molar, Jaw::Lower) => {
-                let r = 0.40 * ca;
-                root(
-                    DVec3::new(-0.45 * ca, 0.0, z0),
-                    DVec3::new(-0.55 * ca + distal_curve, 0.0, -l),
-                    r,
-                    1.8,
-                );
-                root(
-                    DVec3::new(0.45 * ca, 0.0, z0),
-                    DVec3::new(0.55 * ca + distal_curve, 0.0, -l * 0.94),
-                    r,
-                    1.7,
-                );
-            }
-            (ToothType::Premolar, Jaw::Upper) if pos == 4 => {
-                let r = 0.45 * ca;
-                root(
-                    DVec3::new(0.0, 0.4 * cb, z0),
-                    DVec3::new(distal_curve, 0.55 * cb, -l),
-                    r,
-                    1.1,
-                );
-                root(
-                    DVec3::new(0.0, -0.4 * cb, z0),
-                    DVec3::new(distal_curve, -0.55 * cb, -l * 0.95),
-                    r,
-                    1.1,
-                );
-            }
-            _ => {
-                let aspect = (cb / ca).clamp(0.8, 1.6);
-                root(
-                    DVec3::new(0.0, 0.0, z0),
-                    DVec3::new(distal_curve, 0.0, -l),
-                    0.92 * ca.min(cb / aspect),
-                    aspect,
-                );
-            }
-        }
+        let roots = roots(ty, jaw, pos, (ca, cb), root_length, distal_curve);
         ToothShape {
             fdi,
             md,
@@ -488,6 +308,238 @@ impl ToothShape {
         }
         d
     }
+}
+
+/// The crown's form of a tooth type: cross-section, occlusal table, cusps and grooves.
+struct CrownForm {
+    exponent: f64,
+    cervical: f64,
+    occl_md: f64,
+    occl_bl: f64,
+    table: f64,
+    edge_round: f64,
+    incisal: bool,
+    cusps: Vec<Cusp>,
+    grooves: Vec<Groove>,
+}
+
+/// The crown form of a tooth of type `ty` whose crown is `top` high and `(a, b)` half wide
+/// (mesiodistal, buccolingual); molar cusp heights vary with `rng`.
+fn crown_form(ty: ToothType, jaw: Jaw, top: f64, (a, b): (f64, f64), rng: &mut Rng) -> CrownForm {
+    let mut cusps = Vec::new();
+    let mut grooves = Vec::new();
+    let (exponent, cervical, occl_md, occl_bl, table, edge_round, incisal);
+    match ty {
+        ToothType::Incisor => {
+            exponent = 2.3;
+            cervical = 0.70;
+            occl_md = 0.92;
+            occl_bl = 0.22;
+            table = top;
+            edge_round = 0.6;
+            incisal = true;
+            // Mamelons: three tiny lobes on the incisal edge.
+            for k in [-1.0, 0.0, 1.0] {
+                cusps.push(Cusp {
+                    x: k * 0.55 * a,
+                    y: 0.0,
+                    height: 0.15,
+                    radius: 0.35 * a,
+                });
+            }
+        }
+        ToothType::Canine => {
+            exponent = 2.2;
+            cervical = 0.68;
+            occl_md = 0.80;
+            occl_bl = 0.45;
+            table = top - 2.2;
+            edge_round = 0.8;
+            incisal = false;
+            cusps.push(Cusp {
+                x: -0.08 * a,
+                y: 0.1 * b,
+                height: 2.4,
+                radius: 0.55 * a,
+            });
+        }
+        ToothType::Premolar => {
+            exponent = 2.4;
+            cervical = 0.70;
+            occl_md = 0.82;
+            occl_bl = 0.80;
+            table = top - 2.0;
+            edge_round = 0.9;
+            incisal = false;
+            let lingual = if jaw == Jaw::Lower { 0.9 } else { 1.6 };
+            cusps.push(Cusp {
+                x: 0.0,
+                y: 0.42 * b,
+                height: 2.0,
+                radius: 0.42 * a,
+            });
+            cusps.push(Cusp {
+                x: 0.0,
+                y: -0.45 * b,
+                height: lingual,
+                radius: 0.40 * a,
+            });
+            grooves.push(Groove {
+                a: (-0.6 * a, 0.0),
+                b: (0.6 * a, 0.0),
+                depth: 0.7,
+                width: 0.35,
+            });
+        }
+        ToothType::Molar => {
+            exponent = 2.8;
+            cervical = 0.74;
+            occl_md = 0.84;
+            occl_bl = 0.80;
+            table = top - 2.2;
+            edge_round = 1.0;
+            incisal = false;
+            let pts: &[(f64, f64, f64)] = if jaw == Jaw::Upper {
+                &[
+                    (-0.45, 0.45, 2.0),
+                    (0.45, 0.45, 1.8),
+                    (-0.40, -0.45, 2.2),
+                    (0.45, -0.50, 1.4),
+                ]
+            } else {
+                &[
+                    (-0.55, 0.45, 2.0),
+                    (0.05, 0.50, 1.9),
+                    (0.62, 0.30, 1.5),
+                    (-0.45, -0.45, 2.2),
+                    (0.40, -0.45, 2.1),
+                ]
+            };
+            for &(x, y, h) in pts {
+                cusps.push(Cusp {
+                    x: x * a,
+                    y: y * b,
+                    height: h * rng.range(0.9, 1.1),
+                    radius: 0.34 * a.min(b) * 1.2,
+                });
+            }
+            grooves.push(Groove {
+                a: (-0.75 * a, 0.0),
+                b: (0.75 * a, 0.0),
+                depth: 0.8,
+                width: 0.35,
+            });
+            grooves.push(Groove {
+                a: (-0.15 * a, 0.0),
+                b: (-0.25 * a, 0.9 * b),
+                depth: 0.6,
+                width: 0.3,
+            });
+            grooves.push(Groove {
+                a: (0.15 * a, 0.0),
+                b: (0.25 * a, -0.9 * b),
+                depth: 0.6,
+                width: 0.3,
+            });
+        }
+    }
+    CrownForm {
+        exponent,
+        cervical,
+        occl_md,
+        occl_bl,
+        table,
+        edge_round,
+        incisal,
+        cusps,
+        grooves,
+    }
+}
+
+/// The roots of a tooth of type `ty` at arch position `pos`, cervical half widths `(ca, cb)`,
+/// `l` long, their apices bent distally by `distal_curve`.
+fn roots(
+    ty: ToothType,
+    jaw: Jaw,
+    pos: u8,
+    (ca, cb): (f64, f64),
+    l: f64,
+    distal_curve: f64,
+) -> Vec<Root> {
+    let mut roots = Vec::new();
+    let mut root = |top: DVec3, apex: DVec3, r_top: f64, aspect: f64| {
+        roots.push(Root {
+            top,
+            apex,
+            r_top,
+            r_apex: 0.45,
+            aspect,
+        })
+    };
+    let z0 = 1.0;
+    match (ty, jaw) {
+        (ToothType::Molar, Jaw::Upper) => {
+            let r = 0.42 * ca.min(cb);
+            root(
+                DVec3::new(-0.45 * ca, 0.45 * cb, z0),
+                DVec3::new(-0.6 * ca + distal_curve, 0.6 * cb, -l * 0.92),
+                r,
+                1.0,
+            );
+            root(
+                DVec3::new(0.45 * ca, 0.45 * cb, z0),
+                DVec3::new(0.7 * ca + distal_curve, 0.5 * cb, -l * 0.88),
+                r,
+                1.0,
+            );
+            root(
+                DVec3::new(0.0, -0.45 * cb, z0),
+                DVec3::new(distal_curve * 0.5, -0.9 * cb, -l),
+                r * 1.15,
+                1.0,
+            );
+        }
+        (ToothType::Molar, Jaw::Lower) => {
+            let r = 0.40 * ca;
+            root(
+                DVec3::new(-0.45 * ca, 0.0, z0),
+                DVec3::new(-0.55 * ca + distal_curve, 0.0, -l),
+                r,
+                1.8,
+            );
+            root(
+                DVec3::new(0.45 * ca, 0.0, z0),
+                DVec3::new(0.55 * ca + distal_curve, 0.0, -l * 0.94),
+                r,
+                1.7,
+            );
+        }
+        (ToothType::Premolar, Jaw::Upper) if pos == 4 => {
+            let r = 0.45 * ca;
+            root(
+                DVec3::new(0.0, 0.4 * cb, z0),
+                DVec3::new(distal_curve, 0.55 * cb, -l),
+                r,
+                1.1,
+            );
+            root(
+                DVec3::new(0.0, -0.4 * cb, z0),
+                DVec3::new(distal_curve, -0.55 * cb, -l * 0.95),
+                r,
+                1.1,
+            );
+        }
+        _ => {
+            let aspect = (cb / ca).clamp(0.8, 1.6);
+            root(
+                DVec3::new(0.0, 0.0, z0),
+                DVec3::new(distal_curve, 0.0, -l),
+                0.92 * ca.min(cb / aspect),
+                aspect,
+            );
+        }
+    }
+    roots
 }
 
 fn root_sdf(r: &Root, p: DVec3) -> f64 {
