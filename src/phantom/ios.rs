@@ -127,7 +127,62 @@ pub fn simulate(
     realism: &IosRealism,
     rng: &mut Rng,
 ) -> (TriMesh, Vec<i32>, Vec<Vec<DVec3>>) {
-    // Gingiva from the drifted margins.
+    let (gum, glo, ghi) = gingiva_and_extent(teeth, occ);
+    let boxes: Vec<(DVec3, DVec3)> = teeth.iter().map(|t| t.tooth.world_box()).collect();
+    let field = Field {
+        teeth,
+        boxes,
+        gum: &gum,
+    };
+    let rough = realism.rough.as_ref();
+    let h = match rough {
+        Some(r) => realism.spacing / r.density.max(1e-3).sqrt(),
+        None => realism.spacing,
+    };
+    let mut grid = Grid::covering(glo, ghi, h, 1);
+    grid.fill(16, 2.0, |p| field.eval(p));
+    grid.make_well_composed();
+    // A rough export keeps marching-cubes-like slivers.
+    let raw = surface_nets_split(&grid, rough.is_some());
+    let cropped = cropped(&raw, &grid, h, contacts, &gum, occ, realism.notches, rng);
+    let mut mesh = largest_component(&cropped);
+    let guard = FoldGuard::new(&mesh);
+    if rough.is_none() {
+        relax(&mut mesh, &guard, &field, h);
+    }
+    let (mut labels, mut level) = label(&mut mesh, &field, teeth, &guard, rough.is_some(), h);
+    if let Some(r) = rough {
+        let fdis: Vec<u8> = teeth.iter().map(|t| t.fdi).collect();
+        if realism.holes > 0 {
+            punch_holes(&mut mesh, &mut labels, Some(&mut level), realism.holes, rng);
+        }
+        roughen(&mut mesh, &mut labels, level, &fdis, occ, h, r, rng);
+        let margins = true_margins(teeth, &gum);
+        return (mesh, labels, margins);
+    }
+    // Small holes in random crowns.
+    if realism.holes > 0 {
+        punch_holes(&mut mesh, &mut labels, None, realism.holes, rng);
+    }
+    // Measurement noise.
+    if realism.noise > 0.0 {
+        for p in &mut mesh.positions {
+            *p += DVec3::new(
+                rng.normal_clamped(2.5),
+                rng.normal_clamped(2.5),
+                rng.normal_clamped(2.5),
+            ) * realism.noise;
+        }
+    }
+    make_crowns_disks(&mesh, &mut labels, realism.holes > 0);
+    untangle_crowns(&mesh, &mut labels, realism.holes > 0, 6);
+    let margins = true_margins(teeth, &gum);
+    (mesh, labels, margins)
+}
+
+/// The gingiva height field from the drifted margins, and the grid's extent: the teeth's
+/// margins and crown tops, padded, from under the lowest margin to above the highest crown.
+fn gingiva_and_extent(teeth: &[IosTooth], occ: DVec3) -> (Gingiva, DVec3, DVec3) {
     let polars: Vec<MarginPolar> = teeth
         .iter()
         .map(|t| MarginPolar::new(&t.tooth.margin(144), occ, t.tooth.rot * DVec3::X))
@@ -165,22 +220,23 @@ pub fn simulate(
     };
     let glo = DVec3::new(lo.x - reach, lo.y - reach, zlo);
     let ghi = DVec3::new(hi.x + reach, hi.y + reach, zhi);
-    let boxes: Vec<(DVec3, DVec3)> = teeth.iter().map(|t| t.tooth.world_box()).collect();
-    let field = Field {
-        teeth,
-        boxes,
-        gum: &gum,
-    };
-    let rough = realism.rough.as_ref();
-    let h = match rough {
-        Some(r) => realism.spacing / r.density.max(1e-3).sqrt(),
-        None => realism.spacing,
-    };
-    let mut grid = Grid::covering(glo, ghi, h, 1);
-    grid.fill(16, 2.0, |p| field.eval(p));
-    grid.make_well_composed();
-    // A rough export keeps marching-cubes-like slivers.
-    let raw = surface_nets_split(&grid, rough.is_some());
+    (gum, glo, ghi)
+}
+
+/// The surface-nets mesh `raw` of `grid` cropped: faces touching the grid's outer shell (the
+/// artificial closure) dropped, and with `notches` the faces near each interproximal contact
+/// (the scanner cannot see into the contacts).
+#[allow(clippy::too_many_arguments)]
+fn cropped(
+    raw: &TriMesh,
+    grid: &Grid,
+    h: f64,
+    contacts: &[Contact],
+    gum: &Gingiva,
+    occ: DVec3,
+    notches: bool,
+    rng: &mut Rng,
+) -> TriMesh {
     // Crop: drop faces touching the grid's outer shell (the artificial closure).
     let (blo, bhi) = (
         grid.origin + DVec3::splat(1.5 * h),
@@ -198,7 +254,7 @@ pub fn simulate(
         .map(|t| t.iter().all(|&v| inside(raw.positions[v as usize])))
         .collect();
     // Interproximal notches: the scanner cannot see into the contacts.
-    if realism.notches {
+    if notches {
         for c in contacts {
             let r = rng.range(0.55, 0.9);
             let top = c.point + occ * 0.6;
@@ -215,7 +271,7 @@ pub fn simulate(
             }
         }
     }
-    let cropped = TriMesh::new(
+    TriMesh::new(
         raw.positions.clone(),
         raw.triangles
             .iter()
@@ -223,16 +279,23 @@ pub fn simulate(
             .filter(|(_, k)| **k)
             .map(|(t, _)| *t)
             .collect(),
-    );
-    let mut mesh = largest_component(&cropped);
-    let guard = FoldGuard::new(&mesh);
-    if rough.is_none() {
-        relax(&mut mesh, &guard, &field, h);
-    }
-    // Labels with bleed; crown vertices projected onto their tooth. `level` is negative on the
-    // tooth side of the label boundary (used to clip a rough export through it).
+    )
+}
+
+/// Per vertex its label (the nearest tooth where the tooth is under the gingiva plus the label
+/// bleed, else 0) and, for a `rough` export, the labelling level (negative on the tooth side of
+/// the label boundary, used to clip the export through it); crown vertices projected onto their
+/// tooth (through the fold guard on a clean scan).
+fn label(
+    mesh: &mut TriMesh,
+    field: &Field<'_>,
+    teeth: &[IosTooth],
+    guard: &FoldGuard,
+    rough: bool,
+    h: f64,
+) -> (Vec<i32>, Vec<f64>) {
     let mut labels = vec![0i32; mesh.positions.len()];
-    let mut level = vec![0.0f64; if rough.is_some() { labels.len() } else { 0 }];
+    let mut level = vec![0.0f64; if rough { labels.len() } else { 0 }];
     for (v, label) in labels.iter_mut().enumerate() {
         let p = mesh.positions[v];
         let (g, best, tv) = field.parts(p);
@@ -245,45 +308,19 @@ pub fn simulate(
         if tv <= g + bleed && tv < 1.0 {
             *label = t.fdi as i32;
         }
-        if rough.is_some() {
+        if rough {
             level[v] = if tv < 1.0 { tv - (g + bleed) } else { 1.0 };
         }
         if tv < g {
             let q = project(p, &|q| t.tooth.eval(q), h);
-            if rough.is_some() {
+            if rough {
                 mesh.positions[v] = q; // raw: no guard against folds
             } else {
-                guard.try_move(&mut mesh, v, q);
+                guard.try_move(mesh, v, q);
             }
         }
     }
-    if let Some(r) = rough {
-        let fdis: Vec<u8> = teeth.iter().map(|t| t.fdi).collect();
-        if realism.holes > 0 {
-            punch_holes(&mut mesh, &mut labels, Some(&mut level), realism.holes, rng);
-        }
-        roughen(&mut mesh, &mut labels, level, &fdis, occ, h, r, rng);
-        let margins = true_margins(teeth, &gum);
-        return (mesh, labels, margins);
-    }
-    // Small holes in random crowns.
-    if realism.holes > 0 {
-        punch_holes(&mut mesh, &mut labels, None, realism.holes, rng);
-    }
-    // Measurement noise.
-    if realism.noise > 0.0 {
-        for p in &mut mesh.positions {
-            *p += DVec3::new(
-                rng.normal_clamped(2.5),
-                rng.normal_clamped(2.5),
-                rng.normal_clamped(2.5),
-            ) * realism.noise;
-        }
-    }
-    make_crowns_disks(&mesh, &mut labels, realism.holes > 0);
-    untangle_crowns(&mesh, &mut labels, realism.holes > 0, 6);
-    let margins = true_margins(teeth, &gum);
-    (mesh, labels, margins)
+    (labels, level)
 }
 
 /// Where the gingiva meets each tooth (120 points per tooth), the teeth in parallel.
