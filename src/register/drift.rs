@@ -54,22 +54,7 @@ pub(crate) fn fine_smooth(
     let mut stats: BTreeMap<u8, StageStats> =
         order.iter().map(|&f| (f, StageStats::default())).collect();
     let mut ios_to_cbct: BTreeMap<u8, Rigid> = order.iter().map(|&f| (f, inv)).collect();
-    // Smoothness blocks M (6×6) per neighbouring pair: M e = [L·Δw ; Δw × (m − c) + Δt] scaled.
-    let pair_m: Vec<SMatrix<f64, 6, 6>> = (0..n.saturating_sub(1))
-        .map(|k| {
-            let m = 0.5 * (cen[k] + cen[k + 1]) - center;
-            let mut mm = SMatrix::<f64, 6, 6>::zeros();
-            let sr = d.smooth_rotation.sqrt() * d.lever_mm;
-            let st = d.smooth_mm.sqrt();
-            for i in 0..3 {
-                mm[(i, i)] = sr;
-                mm[(3 + i, 3 + i)] = st;
-            }
-            let s = -skew(m) * st;
-            mm.fixed_view_mut::<3, 3>(3, 0).copy_from(&s);
-            mm
-        })
-        .collect();
+    let pair_m = smoothness_blocks(&cen, center, d);
     let radius = order
         .iter()
         .map(|f| teeth[f].ios_radius)
@@ -114,42 +99,9 @@ pub(crate) fn fine_smooth(
                 let st = stats.get_mut(f).expect("tooth in order");
                 st.rms_mm = (ne.rr * s).sqrt();
                 st.inlier_fraction = ne.wsum / pr.len().max(1) as f64;
-                for i in 0..7 {
-                    g[7 * k + i] += ne.g[i] * s;
-                    for j in 0..7 {
-                        a[(7 * k + i, 7 * k + j)] += ne.a[(i, j)] * s;
-                    }
-                }
-                if !o.estimate_offset {
-                    for i in 0..7 {
-                        a[(7 * k + 6, 7 * k + i)] = 0.0;
-                        a[(7 * k + i, 7 * k + 6)] = 0.0;
-                    }
-                    a[(7 * k + 6, 7 * k + 6)] = 1.0;
-                    g[7 * k + 6] = 0.0;
-                }
-                // Rotation prior: κ L² ‖w_k‖² on the accumulated rotation.
-                let kr = d.rotation_prior * d.lever_mm * d.lever_mm;
-                for i in 0..3 {
-                    a[(7 * k + i, 7 * k + i)] += kr;
-                    g[7 * k + i] += kr * x[k][i];
-                }
+                add_tooth_terms(&mut a, &mut g, k, (&ne, s), &x[k], o.estimate_offset, d);
             }
-            for (k, mm) in pair_m.iter().enumerate() {
-                let q = mm.transpose() * mm;
-                let e: SMatrix<f64, 6, 1> = SMatrix::from_fn(|i, _| x[k][i] - x[k + 1][i]);
-                let qe = q * e;
-                for i in 0..6 {
-                    g[7 * k + i] += qe[i];
-                    g[7 * (k + 1) + i] -= qe[i];
-                    for j in 0..6 {
-                        a[(7 * k + i, 7 * k + j)] += q[(i, j)];
-                        a[(7 * (k + 1) + i, 7 * (k + 1) + j)] += q[(i, j)];
-                        a[(7 * k + i, 7 * (k + 1) + j)] -= q[(i, j)];
-                        a[(7 * (k + 1) + i, 7 * k + j)] -= q[(i, j)];
-                    }
-                }
-            }
+            add_smoothness(&mut a, &mut g, &pair_m, &x);
             let tr: f64 = (0..dim).map(|i| a[(i, i)]).sum::<f64>() / dim as f64;
             for i in 0..dim {
                 a[(i, i)] += 1e-9 * tr;
@@ -165,8 +117,8 @@ pub(crate) fn fine_smooth(
                 let t = DVec3::new(step[7 * k + 3], step[7 * k + 4], step[7 * k + 5]);
                 let lever = (cen[k] - center).length() + radius;
                 max_move = max_move.max(t.length() + w.length() * lever);
-                for i in 0..6 {
-                    x[k][i] += step[7 * k + i];
+                for (i, xi) in x[k].iter_mut().enumerate() {
+                    *xi += step[7 * k + i];
                 }
                 offs[k] -= step[7 * k + 6];
             }
@@ -187,4 +139,83 @@ pub(crate) fn fine_smooth(
         st.converged = converged;
     }
     (ios_to_cbct, stats)
+}
+
+/// Smoothness blocks M (6×6) per neighbouring pair of teeth (centroids `cen`, arch order):
+/// `M e = [L·Δw ; Δw × (m − c) + Δt]` scaled, `m` the point between the two teeth, `c` the
+/// twists' centre.
+fn smoothness_blocks(cen: &[DVec3], center: DVec3, d: &DriftOptions) -> Vec<SMatrix<f64, 6, 6>> {
+    (0..cen.len().saturating_sub(1))
+        .map(|k| {
+            let m = 0.5 * (cen[k] + cen[k + 1]) - center;
+            let mut mm = SMatrix::<f64, 6, 6>::zeros();
+            let sr = d.smooth_rotation.sqrt() * d.lever_mm;
+            let st = d.smooth_mm.sqrt();
+            for i in 0..3 {
+                mm[(i, i)] = sr;
+                mm[(3 + i, 3 + i)] = st;
+            }
+            let s = -skew(m) * st;
+            mm.fixed_view_mut::<3, 3>(3, 0).copy_from(&s);
+            mm
+        })
+        .collect()
+}
+
+/// Adds tooth `k`'s data term (its normal equations `ne` scaled by `s`) to the joint system,
+/// its offset held at zero unless `estimate_offset`, and the rotation prior
+/// `κ L² ‖w_k‖²` on its accumulated twist `xk`.
+fn add_tooth_terms(
+    a: &mut DMatrix<f64>,
+    g: &mut DVector<f64>,
+    k: usize,
+    (ne, s): (&Normal7, f64),
+    xk: &[f64; 6],
+    estimate_offset: bool,
+    d: &DriftOptions,
+) {
+    for i in 0..7 {
+        g[7 * k + i] += ne.g[i] * s;
+        for j in 0..7 {
+            a[(7 * k + i, 7 * k + j)] += ne.a[(i, j)] * s;
+        }
+    }
+    if !estimate_offset {
+        for i in 0..7 {
+            a[(7 * k + 6, 7 * k + i)] = 0.0;
+            a[(7 * k + i, 7 * k + 6)] = 0.0;
+        }
+        a[(7 * k + 6, 7 * k + 6)] = 1.0;
+        g[7 * k + 6] = 0.0;
+    }
+    let kr = d.rotation_prior * d.lever_mm * d.lever_mm;
+    for i in 0..3 {
+        a[(7 * k + i, 7 * k + i)] += kr;
+        g[7 * k + i] += kr * xk[i];
+    }
+}
+
+/// Adds the smoothness penalty `‖M_k (x_k − x_{k+1})‖²` of every neighbouring pair to the
+/// joint system (twists `x`, blocks `pair_m`).
+fn add_smoothness(
+    a: &mut DMatrix<f64>,
+    g: &mut DVector<f64>,
+    pair_m: &[SMatrix<f64, 6, 6>],
+    x: &[[f64; 6]],
+) {
+    for (k, mm) in pair_m.iter().enumerate() {
+        let q = mm.transpose() * mm;
+        let e: SMatrix<f64, 6, 1> = SMatrix::from_fn(|i, _| x[k][i] - x[k + 1][i]);
+        let qe = q * e;
+        for i in 0..6 {
+            g[7 * k + i] += qe[i];
+            g[7 * (k + 1) + i] -= qe[i];
+            for j in 0..6 {
+                a[(7 * k + i, 7 * k + j)] += q[(i, j)];
+                a[(7 * (k + 1) + i, 7 * (k + 1) + j)] += q[(i, j)];
+                a[(7 * k + i, 7 * (k + 1) + j)] -= q[(i, j)];
+                a[(7 * (k + 1) + i, 7 * k + j)] -= q[(i, j)];
+            }
+        }
+    }
 }
