@@ -112,53 +112,9 @@ pub fn read_vtp_bytes_with(
                 match name.as_str() {
                     "VTKFile" => {
                         seen_root = true;
-                        let ty = attr(e, "type")?.unwrap_or_default();
-                        if ty != "PolyData" {
-                            return Err(err(format!(
-                                "VTKFile type is {ty:?}; only PolyData is supported"
-                            )));
-                        }
-                        ctx.fmt.big_endian = attr(e, "byte_order")?.as_deref() == Some("BigEndian");
-                        ctx.fmt.header64 = match attr(e, "header_type")?.as_deref() {
-                            None | Some("UInt32") => false,
-                            Some("UInt64") => true,
-                            Some(h) => {
-                                return Err(err(format!(
-                                    "header_type {h:?} (expected UInt32 or UInt64)"
-                                )));
-                            }
-                        };
-                        ctx.fmt.compressed = match attr(e, "compressor")?.as_deref() {
-                            None | Some("") => false,
-                            Some("vtkZLibDataCompressor") => true,
-                            Some(c) => {
-                                return Err(err(format!(
-                                    "compressor {c:?} is not supported (only vtkZLibDataCompressor)"
-                                )));
-                            }
-                        };
+                        ctx.fmt = file_format(file, e)?;
                     }
-                    "Piece" => {
-                        let n = |k: &str| -> Result<usize> {
-                            match attr(e, k)? {
-                                None => Ok(0),
-                                Some(v) => match v.trim().parse::<usize>() {
-                                    Ok(c) if c <= MAX_COUNT => Ok(c),
-                                    _ => Err(err(format!(
-                                        "Piece attribute {k}={v:?} is not a plausible count"
-                                    ))),
-                                },
-                            }
-                        };
-                        pieces.push(Piece {
-                            points: n("NumberOfPoints")?,
-                            verts: n("NumberOfVerts")?,
-                            lines: n("NumberOfLines")?,
-                            polys: n("NumberOfPolys")?,
-                            strips: n("NumberOfStrips")?,
-                            arrays: Vec::new(),
-                        });
-                    }
+                    "Piece" => pieces.push(piece(file, e)?),
                     "PointData" | "CellData" | "Points" | "Verts" | "Lines" | "Polys"
                     | "Strips"
                         if !empty =>
@@ -213,25 +169,7 @@ pub fn read_vtp_bytes_with(
         return Err(err("no <Piece> in <PolyData>".into()));
     }
     if let Some(p) = app_pos {
-        let tail = &bytes[p..];
-        let gt = find(tail, b">").ok_or_else(|| err("unterminated <AppendedData> tag".into()))?;
-        let tag = String::from_utf8_lossy(&tail[..gt]);
-        ctx.appended_base64 = if tag.contains("\"base64\"") {
-            true
-        } else if tag.contains("\"raw\"") {
-            false
-        } else {
-            return Err(err(format!(
-                "<AppendedData> encoding missing or unknown in `{tag}>` (expected raw or base64)"
-            )));
-        };
-        let us = find(&tail[gt..], b"_")
-            .ok_or_else(|| err("appended data lacks its leading `_`".into()))?;
-        ctx.appended = &tail[gt + us + 1..];
-        if ctx.appended_base64 {
-            let end = find(ctx.appended, b"<").unwrap_or(ctx.appended.len());
-            ctx.appended = &ctx.appended[..end];
-        }
+        (ctx.appended_base64, ctx.appended) = appended_block(file, &bytes[p..])?;
         let mut offs: Vec<usize> = pieces
             .iter()
             .flat_map(|p| &p.arrays)
@@ -243,6 +181,87 @@ pub fn read_vtp_bytes_with(
         ctx.offsets = offs;
     }
     assemble(&ctx, &pieces, label_array)
+}
+
+/// The byte order, header size and compression named by the `<VTKFile>` element (which must
+/// be of type PolyData).
+fn file_format(file: &str, e: &BytesStart) -> Result<BlockFormat> {
+    let err = |m: String| Error::Io(format!("{file}: {m}"));
+    let ty = attr(e, "type")?.unwrap_or_default();
+    if ty != "PolyData" {
+        return Err(err(format!(
+            "VTKFile type is {ty:?}; only PolyData is supported"
+        )));
+    }
+    let mut fmt = BlockFormat::default();
+    fmt.big_endian = attr(e, "byte_order")?.as_deref() == Some("BigEndian");
+    fmt.header64 = match attr(e, "header_type")?.as_deref() {
+        None | Some("UInt32") => false,
+        Some("UInt64") => true,
+        Some(h) => {
+            return Err(err(format!(
+                "header_type {h:?} (expected UInt32 or UInt64)"
+            )));
+        }
+    };
+    fmt.compressed = match attr(e, "compressor")?.as_deref() {
+        None | Some("") => false,
+        Some("vtkZLibDataCompressor") => true,
+        Some(c) => {
+            return Err(err(format!(
+                "compressor {c:?} is not supported (only vtkZLibDataCompressor)"
+            )));
+        }
+    };
+    Ok(fmt)
+}
+
+/// A `<Piece>` element's counts (each at most `MAX_COUNT`; a missing one is 0).
+fn piece(file: &str, e: &BytesStart) -> Result<Piece> {
+    let n = |k: &str| -> Result<usize> {
+        match attr(e, k)? {
+            None => Ok(0),
+            Some(v) => match v.trim().parse::<usize>() {
+                Ok(c) if c <= MAX_COUNT => Ok(c),
+                _ => Err(Error::Io(format!(
+                    "{file}: Piece attribute {k}={v:?} is not a plausible count"
+                ))),
+            },
+        }
+    };
+    Ok(Piece {
+        points: n("NumberOfPoints")?,
+        verts: n("NumberOfVerts")?,
+        lines: n("NumberOfLines")?,
+        polys: n("NumberOfPolys")?,
+        strips: n("NumberOfStrips")?,
+        arrays: Vec::new(),
+    })
+}
+
+/// The `<AppendedData>` element starting `tail`: whether it is base64, and its block after
+/// the leading `_` (for base64, up to the next `<`).
+fn appended_block<'a>(file: &str, tail: &'a [u8]) -> Result<(bool, &'a [u8])> {
+    let err = |m: String| Error::Io(format!("{file}: {m}"));
+    let gt = find(tail, b">").ok_or_else(|| err("unterminated <AppendedData> tag".into()))?;
+    let tag = String::from_utf8_lossy(&tail[..gt]);
+    let base64 = if tag.contains("\"base64\"") {
+        true
+    } else if tag.contains("\"raw\"") {
+        false
+    } else {
+        return Err(err(format!(
+            "<AppendedData> encoding missing or unknown in `{tag}>` (expected raw or base64)"
+        )));
+    };
+    let us =
+        find(&tail[gt..], b"_").ok_or_else(|| err("appended data lacks its leading `_`".into()))?;
+    let mut block = &tail[gt + us + 1..];
+    if base64 {
+        let end = find(block, b"<").unwrap_or(block.len());
+        block = &block[..end];
+    }
+    Ok((base64, block))
 }
 
 fn assemble(ctx: &Ctx, pieces: &[Piece], label_array: Option<&str>) -> Result<MeshFile> {
