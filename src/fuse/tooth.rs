@@ -196,38 +196,14 @@ fn cut_inner(
     if !rep.is_clean() {
         warnings.push(format!("IOS crown repaired: {rep:?}"));
     }
-    let mut crown = repaired.transformed(ios_to_output);
-    let mut rep_src = rep_src;
-    let mut trimmed = super::fringe::FringeTrim::default();
-    let mut dist_in = Vec::new();
-    if opts.fringe_reach_mm > 0.0 {
-        let loops = boundary_loops(&crown);
-        if loops.len() == 1 {
-            let d = super::fringe::edge_distance(&crown, &loops[0], opts.fringe_reach_mm);
-            dist_in = vec![f64::INFINITY; ios_crown.positions.len()];
-            for (v, &s) in rep_src.iter().enumerate() {
-                if s != u32::MAX {
-                    dist_in[s as usize] = dist_in[s as usize].min(d[v]);
-                }
-            }
-            if let Some((m, map, t)) = super::fringe::trim_fringe(
-                &crown,
-                &rep_src,
-                &dist_in,
-                opts.fringe_reach_mm,
-                &[],
-                super::fringe::Listed::Within,
-            ) {
-                crown = m;
-                rep_src = map;
-                trimmed = t;
-                warnings.push(format!(
-                    "{} IOS crown vertices ({} faces) trimmed from the margin fringe (folded over other crown faces; at most {:.2} mm from the margin)",
-                    t.vertices, t.faces, t.max_reach_mm
-                ));
-            }
-        }
-    }
+    let crown = repaired.transformed(ios_to_output);
+    let (mut crown, rep_src, trimmed, dist_in) = fold_trim(
+        crown,
+        rep_src,
+        ios_crown.positions.len(),
+        opts,
+        &mut warnings,
+    );
     let mut root_in = cbct.transformed(cbct_to_output);
     if root_in.signed_volume() < 0.0 {
         root_in.flip();
@@ -246,7 +222,7 @@ fn cut_inner(
         .iter()
         .map(|&v| crown.positions[v as usize])
         .collect();
-    let mut frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
+    let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
     // The crown lies to the left of its margin seen from outside: counter-clockwise about the
     // axis. If not, the crown is inward-oriented: flip it (positions untouched).
     if stitch::param::winding(&frame, &margin_pts) < 0.0 {
@@ -267,33 +243,7 @@ fn cut_inner(
     }
     // Crown removal.
     let margin_pts = margin_pts_of(&crown, &margin);
-    let mut rc = cut::cut_crown(&root_in, &margin_pts, &frame, &opts.cut)?;
-    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
-    // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then the cut
-    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis
-    // when the two are more than `MAX_AXIS_TILT_DEG` apart (a tooth that cuts well keeps its
-    // margin frame: a molar's long axis can lie across it).
-    if !winds_once(&frame, &rc)
-        && let Some((_, long)) = crate::geom::principal_axis(&root_in.positions)
-    {
-        let long = if long.dot(frame.axis) < 0.0 {
-            -long
-        } else {
-            long
-        };
-        let tilt = frame.axis.angle_between(long).to_degrees();
-        let long_frame = ToothFrame::new(frame.center, long);
-        if tilt > MAX_AXIS_TILT_DEG
-            && let Ok(r) = cut::cut_crown(&root_in, &margin_pts, &long_frame, &opts.cut)
-            && winds_once(&long_frame, &r)
-        {
-            warnings.push(format!(
-                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis and the cut about it did not go around the tooth: cut about the long axis"
-            ));
-            frame = long_frame;
-            rc = r;
-        }
-    }
+    let (frame, rc) = cut_root(&root_in, &margin_pts, frame, opts, &mut warnings)?;
     let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
     let root_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
     let chords = loop_chords(&crown, &margin, BandVertex::Upper)
@@ -319,6 +269,91 @@ fn cut_inner(
         warnings,
         cut_ms,
     })
+}
+
+/// The fringe trim before the first band build (default preset, `opts.fringe_reach_mm` > 0):
+/// crown faces within the reach of the margin that cross other crown faces, peeled
+/// ([`super::fringe::trim_fringe`]). Returns the crown, its vertices' input indices, the trim
+/// and per input vertex its distance from the margin along the crown (empty when off).
+fn fold_trim(
+    mut crown: TriMesh,
+    mut rep_src: Vec<u32>,
+    input_vertices: usize,
+    opts: &FuseOptions,
+    warnings: &mut Vec<String>,
+) -> (TriMesh, Vec<u32>, super::fringe::FringeTrim, Vec<f64>) {
+    let mut trimmed = super::fringe::FringeTrim::default();
+    let mut dist_in = Vec::new();
+    if opts.fringe_reach_mm > 0.0 {
+        let loops = boundary_loops(&crown);
+        if loops.len() == 1 {
+            let d = super::fringe::edge_distance(&crown, &loops[0], opts.fringe_reach_mm);
+            dist_in = vec![f64::INFINITY; input_vertices];
+            for (v, &s) in rep_src.iter().enumerate() {
+                if s != u32::MAX {
+                    dist_in[s as usize] = dist_in[s as usize].min(d[v]);
+                }
+            }
+            if let Some((m, map, t)) = super::fringe::trim_fringe(
+                &crown,
+                &rep_src,
+                &dist_in,
+                opts.fringe_reach_mm,
+                &[],
+                super::fringe::Listed::Within,
+            ) {
+                crown = m;
+                rep_src = map;
+                trimmed = t;
+                warnings.push(format!(
+                    "{} IOS crown vertices ({} faces) trimmed from the margin fringe (folded over other crown faces; at most {:.2} mm from the margin)",
+                    t.vertices, t.faces, t.max_reach_mm
+                ));
+            }
+        }
+    }
+    (crown, rep_src, trimmed, dist_in)
+}
+
+/// Crown removal along the margin `margin_pts` about `frame`'s axis; where that cut does not go
+/// once around the tooth and the margin's plane is tilted more than [`MAX_AXIS_TILT_DEG`] off
+/// the CBCT tooth's long axis, the cut is made again about that axis. Returns the frame used
+/// and the cut.
+fn cut_root(
+    root_in: &TriMesh,
+    margin_pts: &[DVec3],
+    mut frame: ToothFrame,
+    opts: &FuseOptions,
+    warnings: &mut Vec<String>,
+) -> Result<(ToothFrame, RootCut)> {
+    let mut rc = cut::cut_crown(root_in, margin_pts, &frame, &opts.cut)?;
+    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
+    // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then the cut
+    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis
+    // when the two are more than `MAX_AXIS_TILT_DEG` apart (a tooth that cuts well keeps its
+    // margin frame: a molar's long axis can lie across it).
+    if !winds_once(&frame, &rc)
+        && let Some((_, long)) = crate::geom::principal_axis(&root_in.positions)
+    {
+        let long = if long.dot(frame.axis) < 0.0 {
+            -long
+        } else {
+            long
+        };
+        let tilt = frame.axis.angle_between(long).to_degrees();
+        let long_frame = ToothFrame::new(frame.center, long);
+        if tilt > MAX_AXIS_TILT_DEG
+            && let Ok(r) = cut::cut_crown(root_in, margin_pts, &long_frame, &opts.cut)
+            && winds_once(&long_frame, &r)
+        {
+            warnings.push(format!(
+                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis and the cut about it did not go around the tooth: cut about the long axis"
+            ));
+            frame = long_frame;
+            rc = r;
+        }
+    }
+    Ok((frame, rc))
 }
 
 /// Largest angle (degrees) between the margin plane's normal and the CBCT tooth's long axis
