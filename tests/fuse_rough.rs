@@ -35,16 +35,18 @@ const ROUGH: Bounds = Bounds {
     trimmed_share: 0.11,
 };
 
-/// Asserts the contract on every fused tooth; returns (teeth, trimmed vertices in all).
+/// Asserts the contract on every fused tooth; returns (teeth, trimmed vertices in all, crossing
+/// pairs added in all).
 fn check(
     b: &Bounds,
     tag: &str,
     ios: &LabeledMesh,
     fused: &FusedJaw,
     tr: &BTreeMap<u8, ToothTransforms>,
-) -> (usize, usize) {
+) -> (usize, usize, usize) {
     let crowns = ios_crowns(ios).expect("crowns");
     let mut trimmed = 0;
+    let mut added_all = 0;
     let mut worst_share = 0.0f64;
     for (fdi, t) in &fused.teeth {
         let q = &t.quality;
@@ -65,6 +67,7 @@ fn check(
         if !added.is_empty() {
             println!("{what}: {} crossing pairs added", added.len());
         }
+        added_all += added.len();
         assert_eq!(
             q.band_crossings_left,
             added.len(),
@@ -111,10 +114,13 @@ fn check(
         worst_share = worst_share.max(q.ios_vertices_trimmed as f64 / n as f64);
     }
     println!("{tag}: largest trimmed share {:.2} %", 100.0 * worst_share);
-    (fused.teeth.len(), trimmed)
+    (fused.teeth.len(), trimmed, added_all)
 }
 
-fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
+/// Fuses each rough jaw with its true transforms and checks it; asserts that the crossing pairs
+/// the fusion added over all of them are at most `max_added` (the measured count).
+fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)], max_added: usize) {
+    let mut added = 0;
     for &(seed, jaw, variant, export) in cases {
         let mut opts = PhantomOptions {
             seed,
@@ -133,9 +139,15 @@ fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
         // whose cut about that plane's normal does not go around the tooth, is cut again about
         // the CBCT tooth's long axis.
         assert!(fused.failed.is_empty(), "{tag}: failed {:?}", fused.failed);
-        let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
+        let (n, trimmed, a) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
         println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");
+        added += a;
     }
+    println!("{added} crossing pairs added over these jaws");
+    assert!(
+        added <= max_added,
+        "{added} crossing pairs added, measured {max_added}"
+    );
 }
 
 use Jaw::{Lower, Upper};
@@ -143,27 +155,33 @@ use Variant::{Full, HeavyDrift, MetalArtefact, MissingTeeth, PartialArch};
 
 #[test]
 fn rough_full_arches() {
-    rough_jaws(&[
-        (11, Upper, Full, IosExport::Rough),
-        (12, Lower, Full, IosExport::Rough),
-        (13, Upper, HeavyDrift, IosExport::Rough),
-        (14, Lower, MetalArtefact, IosExport::Rough),
-        (15, Upper, MissingTeeth, IosExport::Rough),
-    ]);
+    rough_jaws(
+        &[
+            (11, Upper, Full, IosExport::Rough),
+            (12, Lower, Full, IosExport::Rough),
+            (13, Upper, HeavyDrift, IosExport::Rough),
+            (14, Lower, MetalArtefact, IosExport::Rough),
+            (15, Upper, MissingTeeth, IosExport::Rough),
+        ],
+        17,
+    );
 }
 
 #[test]
 fn coarse_and_partial_arches() {
-    rough_jaws(&[
-        (16, Lower, Full, IosExport::Coarse),
-        (17, Upper, MetalArtefact, IosExport::Coarse),
-        (18, Lower, PartialArch, IosExport::Rough),
-        (19, Upper, PartialArch, IosExport::Coarse),
-        (20, Lower, MissingTeeth, IosExport::Coarse),
-        (21, Upper, HeavyDrift, IosExport::Coarse),
-        (22, Lower, PartialArch, IosExport::Dense2),
-        (23, Upper, PartialArch, IosExport::Rough),
-    ]);
+    rough_jaws(
+        &[
+            (16, Lower, Full, IosExport::Coarse),
+            (17, Upper, MetalArtefact, IosExport::Coarse),
+            (18, Lower, PartialArch, IosExport::Rough),
+            (19, Upper, PartialArch, IosExport::Coarse),
+            (20, Lower, MissingTeeth, IosExport::Coarse),
+            (21, Upper, HeavyDrift, IosExport::Coarse),
+            (22, Lower, PartialArch, IosExport::Dense2),
+            (23, Upper, PartialArch, IosExport::Rough),
+        ],
+        29,
+    );
 }
 
 /// Dense exports (2x, 4x, subdivided): ~2.5 min of CPU, outside the test command's time budget;
@@ -171,15 +189,18 @@ fn coarse_and_partial_arches() {
 #[test]
 #[ignore]
 fn dense_arches() {
-    rough_jaws(&[
-        (24, Upper, PartialArch, IosExport::Dense4),
-        (25, Lower, Full, IosExport::Dense2),
-        (26, Lower, HeavyDrift, IosExport::Rough),
-        (27, Upper, PartialArch, IosExport::Subdivided),
-        (28, Lower, MetalArtefact, IosExport::Dense2),
-        (29, Upper, MissingTeeth, IosExport::Rough),
-        (30, Lower, PartialArch, IosExport::Dense4),
-    ]);
+    rough_jaws(
+        &[
+            (24, Upper, PartialArch, IosExport::Dense4),
+            (25, Lower, Full, IosExport::Dense2),
+            (26, Lower, HeavyDrift, IosExport::Rough),
+            (27, Upper, PartialArch, IosExport::Subdivided),
+            (28, Lower, MetalArtefact, IosExport::Dense2),
+            (29, Upper, MissingTeeth, IosExport::Rough),
+            (30, Lower, PartialArch, IosExport::Dense4),
+        ],
+        8,
+    );
 }
 
 #[test]
@@ -197,7 +218,7 @@ fn foreign_jaws() {
             fuse_jaw(&ios, &cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         assert!(fused.failed.is_empty(), "{case}: failed {:?}", fused.failed);
         assert_eq!(fused.teeth.len(), 14, "{case}");
-        let (n, trimmed) = check(&FOREIGN, &case, &ios, &fused, &tr);
+        let (n, trimmed, _) = check(&FOREIGN, &case, &ios, &fused, &tr);
         println!("{case}: {n} teeth fused, {trimmed} IOS vertices trimmed");
     }
 }

@@ -232,10 +232,10 @@ fn retrim(
     r.or_else(|| trim(&pierced, Listed::MarginEdge))
 }
 
-/// After the builds, for a kept build still crossed: its crown loses only the faces on its
-/// pierced margin edges while that leaves fewer crossings (up to [`POLISH_ROUNDS`] builds), then
-/// the band is built again with other tangent lengths ([`reshaped`]). Returns the build and the
-/// tooth's trim.
+/// After the builds, for a kept build still crossed: its crown loses the faces on its pierced
+/// margin edges, or else only the crown faces the band still crosses, while that leaves fewer
+/// crossings (up to [`POLISH_ROUNDS`] steps, [`polish_step`]), then the band is built again
+/// with other tangent lengths ([`reshaped`]). Returns the build and the tooth's trim.
 fn polish(
     ct: &CutTooth,
     opts: &FuseOptions,
@@ -251,23 +251,9 @@ fn polish(
         if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
             break;
         }
-        let pierced = pierced_margin_faces(&a, best_side.crown.positions.len());
-        let Some((crown, map, t)) = super::fringe::trim_fringe(
-            &best_side.crown,
-            &best_side.ios_vertex,
-            &ct.dist_in,
-            opts.fringe_reach_mm,
-            &pierced,
-            Listed::MarginEdge,
-        )
-        .filter(|_| !pierced.is_empty()) else {
+        let Some((b, next, t)) = polish_step(ct, opts, &a, &best_side)? else {
             break;
         };
-        let next = trimmed_side(ct, crown, map);
-        let b = assemble(ct, &next, opts)?;
-        if crossings_left(&b) >= crossings_left(&a) {
-            break;
-        }
         if kept_build.is_none() {
             kept_build = Some(std::mem::replace(&mut a, b));
         } else {
@@ -288,6 +274,52 @@ fn polish(
         }
     }
     Ok((a, trimmed))
+}
+
+/// One polishing step of build `a` on `side`: its crown loses the faces on its pierced margin
+/// edges ([`pierced_margin_faces`], [`Listed::MarginEdge`]); where that leaves no fewer
+/// crossings, only the crown faces the band still crosses (within the reach, else with an
+/// apex beyond it, else on a margin edge whatever the reach: no vertex beyond the reach is
+/// lost). Returns the first of these builds with fewer crossings left, its crown side and trim.
+fn polish_step(
+    ct: &CutTooth,
+    opts: &FuseOptions,
+    a: &Assembled,
+    side: &CrownSide,
+) -> Result<Option<(Assembled, CrownSide, super::fringe::FringeTrim)>> {
+    let trim = |listed: &[u32], mode| {
+        if listed.is_empty() {
+            return None;
+        }
+        super::fringe::trim_fringe(
+            &side.crown,
+            &side.ios_vertex,
+            &ct.dist_in,
+            opts.fringe_reach_mm,
+            listed,
+            mode,
+        )
+    };
+    let n = side.crown.positions.len();
+    for stage in 0..2 {
+        let cut = if stage == 0 {
+            trim(&pierced_margin_faces(a, n), Listed::MarginEdge)
+        } else {
+            let hit = crown_faces_hit(a, n, false);
+            trim(&hit, Listed::Within)
+                .or_else(|| trim(&hit, Listed::Apex))
+                .or_else(|| trim(&hit, Listed::MarginEdge))
+        };
+        let Some((crown, map, t)) = cut else {
+            continue;
+        };
+        let next = trimmed_side(ct, crown, map);
+        let b = assemble(ct, &next, opts)?;
+        if crossings_left(&b) < crossings_left(a) {
+            return Ok(Some((b, next, t)));
+        }
+    }
+    Ok(None)
 }
 
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
