@@ -13,7 +13,7 @@ use super::band_crossings::{Recount, bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
-use crate::mesh_check::triangles_intersect;
+use crate::mesh_check::{FixedCorners, intersect_moving_corner, triangles_intersect};
 use glam::DVec3;
 use std::ops::Range;
 
@@ -217,14 +217,18 @@ fn bad_faces(
 }
 
 /// The faces around a star, split once per vertex: the other faces (which do not move while
-/// the star's vertex does) with their boxes, and the star's own faces among them by star index.
+/// the star's vertex `v` does) with their boxes, and the star's own faces among them by star
+/// index; `fixed[k * others.len() + j]` what the test of star face `k` with other face `j`
+/// knows of the star face's fixed corners (filled as the pairs are first tested).
 struct Around {
+    v: u32,
     others: Vec<(u32, (DVec3, DVec3))>,
     star_members: Vec<usize>,
+    fixed: Vec<FixedCorners>,
 }
 
 impl Around {
-    fn new(mesh: &TriMesh, star: &[u32], faces: &[u32]) -> Around {
+    fn new(mesh: &TriMesh, v: u32, star: &[u32], faces: &[u32]) -> Around {
         let mut others = Vec::with_capacity(faces.len());
         let mut star_members = Vec::new();
         for &g in faces {
@@ -234,6 +238,8 @@ impl Around {
             }
         }
         Around {
+            v,
+            fixed: vec![FixedCorners::Unknown; star.len() * others.len()],
             others,
             star_members,
         }
@@ -271,7 +277,7 @@ fn score(
     mesh: &TriMesh,
     star: &[u32],
     normals: &[DVec3],
-    around: &Around,
+    around: &mut Around,
     max_folded: usize,
     beat: Option<Key>,
     budget: &mut usize,
@@ -297,25 +303,33 @@ fn score(
         Some(b) => b.0.checked_sub(1)?,
     };
     let mut crossings = 0;
-    let mut count = |f: u32, g: u32| {
+    // Each exact test spends one of the budget; true when the candidate is out.
+    let mut count = |hit: &mut dyn FnMut() -> bool| {
         if *budget == 0 {
             return true;
         }
         *budget -= 1;
-        if triangles_intersect(mesh, f as usize, g as usize) {
+        if hit() {
             crossings += 1;
         }
         crossings > max_crossings
     };
+    let n_others = around.others.len();
     for (k, &f) in star.iter().enumerate() {
         let bf = boxes[k];
-        for &(g, bg) in &around.others {
-            if overlap(bf, bg) && count(f, g) {
+        let memo = &mut around.fixed[k * n_others..(k + 1) * n_others];
+        for (&(g, bg), m) in around.others.iter().zip(memo) {
+            if overlap(bf, bg)
+                && count(&mut || intersect_moving_corner(mesh, f as usize, g as usize, around.v, m))
+            {
                 return None;
             }
         }
         for &j in &around.star_members {
-            if j > k && overlap(bf, boxes[j]) && count(f, star[j]) {
+            if j > k
+                && overlap(bf, boxes[j])
+                && count(&mut || triangles_intersect(mesh, f as usize, star[j] as usize))
+            {
                 return None;
             }
         }
@@ -362,8 +376,13 @@ fn improve_vertex(
         hi = hi.max(mesh.positions[w as usize]);
     }
     let grow = DVec3::splat(0.5 * scale);
-    let around = Around::new(mesh, star, &near.faces_in_box(mesh, lo - grow, hi + grow));
-    let Some(current) = score(mesh, star, &normals, &around, usize::MAX, None, budget) else {
+    let mut around = Around::new(
+        mesh,
+        v,
+        star,
+        &near.faces_in_box(mesh, lo - grow, hi + grow),
+    );
+    let Some(current) = score(mesh, star, &normals, &mut around, usize::MAX, None, budget) else {
         return false;
     };
     let centroid = ring
@@ -435,7 +454,7 @@ fn improve_vertex(
             mesh,
             star,
             &normals,
-            &around,
+            &mut around,
             current.1,
             Some(best.0),
             budget,

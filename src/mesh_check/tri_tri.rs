@@ -181,6 +181,81 @@ fn in_sector(pr: Proj, v: DVec3, a: DVec3, b: DVec3, x: DVec3) -> bool {
     s1 == s && s2 == s
 }
 
+/// Whether the signs are all equal and not zero (a triangle strictly on one side of a plane).
+fn one_side(s: [i8; 3]) -> bool {
+    s[0] != 0 && s[0] == s[1] && s[1] == s[2]
+}
+
+/// Two faces sharing no vertex, once the first triangle is known not to lie strictly on one
+/// side of the second's plane: the second against the first's plane, then the edge tests.
+fn disjoint_rest(t1: [DVec3; 3], t2: [DVec3; 3], one_side_filter: bool) -> bool {
+    let ([a, b, c], [d, e, h]) = (t1, t2);
+    if one_side_filter && one_side([o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)]) {
+        return false;
+    }
+    seg_tri(a, b, d, e, h)
+        || seg_tri(b, c, d, e, h)
+        || seg_tri(c, a, d, e, h)
+        || seg_tri(d, e, a, b, c)
+        || seg_tri(e, h, a, b, c)
+        || seg_tri(h, d, a, b, c)
+}
+
+/// What [`triangles_intersect`] of a face `f` with one moving corner `v` and a face `g` that
+/// does not move knows before `v` is placed: the signs of `f`'s two other corners against
+/// `g`'s plane do not change while `v` moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FixedCorners {
+    /// Not looked at yet.
+    Unknown,
+    /// The faces share a vertex: the test runs in full.
+    Shared,
+    /// The two fixed corners are not strictly on one side of `g`'s plane: `f` is not either.
+    Straddle,
+    /// Both fixed corners strictly on this side of `g`'s plane.
+    Side(i8),
+}
+
+/// [`triangles_intersect`]`(mesh, f, g)` where only `f`'s corner `v` moved since `memo` was
+/// filled (`Unknown` the first time): the same answer (every decision is the same exact sign),
+/// with the fixed corners' signs against `g`'s plane taken from `memo`.
+pub fn intersect_moving_corner(
+    mesh: &TriMesh,
+    f: usize,
+    g: usize,
+    v: u32,
+    memo: &mut FixedCorners,
+) -> bool {
+    let (t1, t2) = (mesh.triangles[f], mesh.triangles[g]);
+    let p = |v: u32| mesh.positions[v as usize];
+    if *memo == FixedCorners::Unknown {
+        *memo = if t1.iter().any(|x| t2.contains(x)) {
+            FixedCorners::Shared
+        } else {
+            let [d, e, h] = t2.map(p);
+            let (mut s, mut n) = ([0i8; 3], 0);
+            for x in t1.into_iter().filter(|&x| x != v) {
+                s[n] = o3(d, e, h, p(x));
+                n += 1;
+            }
+            if n == 2 && s[0] != 0 && s[0] == s[1] {
+                FixedCorners::Side(s[0])
+            } else {
+                FixedCorners::Straddle
+            }
+        };
+    }
+    let (tri1, tri2) = (t1.map(p), t2.map(p));
+    match *memo {
+        FixedCorners::Side(s) => {
+            let [d, e, h] = tri2;
+            o3(d, e, h, p(v)) != s && disjoint_rest(tri1, tri2, true)
+        }
+        FixedCorners::Straddle => disjoint_rest(tri1, tri2, true),
+        _ => intersect(mesh, f, g, true),
+    }
+}
+
 /// Whether faces `f` and `g` of `mesh` intersect improperly (beyond their shared vertices).
 pub fn triangles_intersect(mesh: &TriMesh, f: usize, g: usize) -> bool {
     intersect(mesh, f, g, true)
@@ -206,19 +281,10 @@ fn intersect(mesh: &TriMesh, f: usize, g: usize, one_side_filter: bool) -> bool 
             let [d, e, h] = t2.map(p);
             // A triangle strictly on one side of the other's plane meets nothing of it (the
             // edge tests below would each find the same signs): 3 signs instead of 12.
-            let one_side = |s: [i8; 3]| s[0] != 0 && s[0] == s[1] && s[1] == s[2];
-            if one_side_filter
-                && (one_side([o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)])
-                    || one_side([o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)]))
-            {
+            if one_side_filter && one_side([o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)]) {
                 return false;
             }
-            seg_tri(a, b, d, e, h)
-                || seg_tri(b, c, d, e, h)
-                || seg_tri(c, a, d, e, h)
-                || seg_tri(d, e, a, b, c)
-                || seg_tri(e, h, a, b, c)
-                || seg_tri(h, d, a, b, c)
+            disjoint_rest([a, b, c], [d, e, h], one_side_filter)
         }
         1 => {
             let v = shared[0];
@@ -319,6 +385,36 @@ mod tests {
             answered > 150_000 && gave_up > 50_000,
             "{answered} {gave_up}"
         );
+    }
+
+    /// The memoized test answers as the full one while one corner moves: random lattice pairs
+    /// (many coplanar, touching and shared-vertex cases), the memo filled at the first
+    /// position and kept over the moves of corner 0; both answers occur often.
+    #[test]
+    fn moving_corner_memo_is_exact() {
+        let mut rng = crate::phantom::rng::Rng::new(9);
+        let mut next = |n: u64| rng.below(n as usize) as u64;
+        let mut hits = [0usize; 2];
+        for _ in 0..20_000 {
+            let mut positions: Vec<DVec3> = (0..6)
+                .map(|_| DVec3::new(next(4) as f64, next(4) as f64, next(3) as f64 * 0.5))
+                .collect();
+            let t2 = match next(3) {
+                0 => [3, 4, 5],
+                1 => [1, 4, 5],
+                _ => [2, 1, 5],
+            };
+            let mut mesh = TriMesh::new(positions.clone(), vec![[0, 1, 2], t2]);
+            let mut memo = FixedCorners::Unknown;
+            for _ in 0..8 {
+                positions[0] = DVec3::new(next(4) as f64, next(4) as f64, next(3) as f64 * 0.5);
+                mesh.positions[0] = positions[0];
+                let memoized = intersect_moving_corner(&mesh, 0, 1, 0, &mut memo);
+                assert_eq!(memoized, triangles_intersect(&mesh, 0, 1), "{mesh:?}");
+                hits[memoized as usize] += 1;
+            }
+        }
+        assert!(hits[0] > 10_000 && hits[1] > 10_000, "{hits:?}");
     }
 
     /// The one-side rejection changes no answer: random pairs of faces on a coarse integer
