@@ -52,7 +52,7 @@ pub(super) fn count_all(mesh: &TriMesh, band: Range<usize>, scale: f64) -> Vec<(
             }
         });
     }
-    pairs.sort_unstable();
+    crate::radix::sort_by_key(&mut pairs, |&(f, g)| (f as u64) << 32 | g as u64);
     pairs.dedup();
     let mut crossings: Vec<(u32, u32)> = pairs
         .into_iter()
