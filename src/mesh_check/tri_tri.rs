@@ -137,10 +137,9 @@ fn point_in_tri_2d(pr: Proj, p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
     (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0)
 }
 
-/// Closed segment `pq` against closed triangle `abc`.
-fn seg_tri(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let sp = o3(a, b, c, p);
-    let sq = o3(a, b, c, q);
+/// Closed segment `pq` against closed triangle `abc`, given the signs `sp`, `sq` of `p` and
+/// `q` against the triangle's plane (`o3(a, b, c, p)`, `o3(a, b, c, q)`).
+fn seg_tri(p: DVec3, q: DVec3, [sp, sq]: [i8; 2], a: DVec3, b: DVec3, c: DVec3) -> bool {
     if sp == sq && sp != 0 {
         return false;
     }
@@ -186,34 +185,38 @@ fn one_side(s: [i8; 3]) -> bool {
     s[0] != 0 && s[0] == s[1] && s[1] == s[2]
 }
 
-/// Two faces sharing no vertex, once the first triangle is known not to lie strictly on one
-/// side of the second's plane: the second against the first's plane, then the edge tests.
-fn disjoint_rest(t1: [DVec3; 3], t2: [DVec3; 3], one_side_filter: bool) -> bool {
+/// Two faces sharing no vertex, given the signs `s1` of the first's corners against the
+/// second's plane: a triangle strictly on one side of the other's plane meets nothing of it
+/// (the edge tests would each find the same signs), else the edge tests, each edge's corner
+/// signs taken from those computed for the rejection.
+fn disjoint(t1: [DVec3; 3], t2: [DVec3; 3], s1: [i8; 3], one_side_filter: bool) -> bool {
     let ([a, b, c], [d, e, h]) = (t1, t2);
-    if one_side_filter && one_side([o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)]) {
+    if one_side_filter && one_side(s1) {
         return false;
     }
-    seg_tri(a, b, d, e, h)
-        || seg_tri(b, c, d, e, h)
-        || seg_tri(c, a, d, e, h)
-        || seg_tri(d, e, a, b, c)
-        || seg_tri(e, h, a, b, c)
-        || seg_tri(h, d, a, b, c)
+    let s2 = [o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)];
+    if one_side_filter && one_side(s2) {
+        return false;
+    }
+    seg_tri(a, b, [s1[0], s1[1]], d, e, h)
+        || seg_tri(b, c, [s1[1], s1[2]], d, e, h)
+        || seg_tri(c, a, [s1[2], s1[0]], d, e, h)
+        || seg_tri(d, e, [s2[0], s2[1]], a, b, c)
+        || seg_tri(e, h, [s2[1], s2[2]], a, b, c)
+        || seg_tri(h, d, [s2[2], s2[0]], a, b, c)
 }
 
 /// What [`triangles_intersect`] of a face `f` with one moving corner `v` and a face `g` that
-/// does not move knows before `v` is placed: the signs of `f`'s two other corners against
-/// `g`'s plane do not change while `v` moves.
+/// does not move knows before `v` is placed: the signs of `f`'s other corners against `g`'s
+/// plane do not change while `v` moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FixedCorners {
     /// Not looked at yet.
     Unknown,
     /// The faces share a vertex: the test runs in full.
     Shared,
-    /// The two fixed corners are not strictly on one side of `g`'s plane: `f` is not either.
-    Straddle,
-    /// Both fixed corners strictly on this side of `g`'s plane.
-    Side(i8),
+    /// The signs of `f`'s corners against `g`'s plane, `v`'s slot to be filled.
+    Signs([i8; 3]),
 }
 
 /// [`triangles_intersect`]`(mesh, f, g)` where only `f`'s corner `v` moved since `memo` was
@@ -228,30 +231,24 @@ pub fn intersect_moving_corner(
 ) -> bool {
     let (t1, t2) = (mesh.triangles[f], mesh.triangles[g]);
     let p = |v: u32| mesh.positions[v as usize];
+    let (tri1, tri2) = (t1.map(p), t2.map(p));
+    let [d, e, h] = tri2;
     if *memo == FixedCorners::Unknown {
         *memo = if t1.iter().any(|x| t2.contains(x)) {
             FixedCorners::Shared
         } else {
-            let [d, e, h] = t2.map(p);
-            let (mut s, mut n) = ([0i8; 3], 0);
-            for x in t1.into_iter().filter(|&x| x != v) {
-                s[n] = o3(d, e, h, p(x));
-                n += 1;
-            }
-            if n == 2 && s[0] != 0 && s[0] == s[1] {
-                FixedCorners::Side(s[0])
-            } else {
-                FixedCorners::Straddle
-            }
+            FixedCorners::Signs(t1.map(|x| if x == v { 0 } else { o3(d, e, h, p(x)) }))
         };
     }
-    let (tri1, tri2) = (t1.map(p), t2.map(p));
     match *memo {
-        FixedCorners::Side(s) => {
-            let [d, e, h] = tri2;
-            o3(d, e, h, p(v)) != s && disjoint_rest(tri1, tri2, true)
+        FixedCorners::Signs(mut s1) => {
+            for (k, &x) in t1.iter().enumerate() {
+                if x == v {
+                    s1[k] = o3(d, e, h, tri1[k]);
+                }
+            }
+            disjoint(tri1, tri2, s1, true)
         }
-        FixedCorners::Straddle => disjoint_rest(tri1, tri2, true),
         _ => intersect(mesh, f, g, true),
     }
 }
@@ -279,12 +276,8 @@ fn intersect(mesh: &TriMesh, f: usize, g: usize, one_side_filter: bool) -> bool 
         0 => {
             let [a, b, c] = t1.map(p);
             let [d, e, h] = t2.map(p);
-            // A triangle strictly on one side of the other's plane meets nothing of it (the
-            // edge tests below would each find the same signs): 3 signs instead of 12.
-            if one_side_filter && one_side([o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)]) {
-                return false;
-            }
-            disjoint_rest([a, b, c], [d, e, h], one_side_filter)
+            let s1 = [o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)];
+            disjoint([a, b, c], [d, e, h], s1, one_side_filter)
         }
         1 => {
             let v = shared[0];
@@ -302,7 +295,7 @@ fn intersect(mesh: &TriMesh, f: usize, g: usize, one_side_filter: bool) -> bool 
             if one_side_filter && ((sc != 0 && sc == sd) || (sa != 0 && sa == sb)) {
                 return false;
             }
-            if seg_tri(pa, pb, pv, pc, pd) || seg_tri(pc, pd, pv, pa, pb) {
+            if seg_tri(pa, pb, [sa, sb], pv, pc, pd) || seg_tri(pc, pd, [sc, sd], pv, pa, pb) {
                 return true;
             }
             let coplanar = sc == 0 && sd == 0;
