@@ -1,7 +1,7 @@
 //! A uniform grid of triangle bounding boxes: candidate pairs for intersection tests and
 //! ring-by-ring nearest-triangle search. Deterministic (sorted vectors, no hashing).
 
-use crate::geom::closest_point_on_triangle;
+use crate::geom::{closest_point_on_triangle, floor_i64};
 use crate::mesh::TriMesh;
 use glam::DVec3;
 
@@ -95,7 +95,7 @@ impl TriangleGrid {
 
     fn index_unclamped(&self, p: DVec3) -> [i64; 3] {
         let q = (p - self.origin) / self.cell;
-        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+        [floor_i64(q.x), floor_i64(q.y), floor_i64(q.z)]
     }
 
     fn index_of(&self, p: DVec3) -> [i64; 3] {
