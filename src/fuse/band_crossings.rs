@@ -39,21 +39,25 @@ pub(super) fn count_all(mesh: &TriMesh, band: Range<usize>, scale: f64) -> Vec<(
     let region = band_region(mesh, band.clone(), 2.0 * scale);
     let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
     let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
-    // Band–band pairs, then band–other: faces in the band's cells.
+    // Band–band pairs, then band–other: faces in the band's cells, each pair once (the pairs
+    // are only tested: their order does not matter).
     let mut pairs = grid.candidate_pairs(mesh);
+    let mut hits = Vec::new();
     for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
         let bg = bbox(mesh, g);
         if !overlap(bg, region) {
             continue;
         }
+        hits.clear();
         grid.for_each_in_box(bg.0, bg.1, |f| {
             if overlap(bbox(mesh, f as usize), bg) {
-                pairs.push((f, g as u32));
+                hits.push(f);
             }
         });
+        hits.sort_unstable();
+        hits.dedup();
+        pairs.extend(hits.iter().map(|&f| (f, g as u32)));
     }
-    crate::radix::sort_by_key(&mut pairs, |&(f, g)| (f as u64) << 32 | g as u64);
-    pairs.dedup();
     let mut crossings: Vec<(u32, u32)> = pairs
         .into_iter()
         .filter(|&(f, g)| triangles_intersect(mesh, f as usize, g as usize))

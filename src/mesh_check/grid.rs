@@ -81,7 +81,14 @@ impl TriangleGrid {
                 }
             }
         }
-        crate::radix::sort_by_key(&mut g.entries, |&k| k);
+        // Entries are pushed face by face: for faces in increasing order they are sorted by
+        // face already, and a stable sort by cell alone gives the order by (cell, face).
+        if faces.windows(2).all(|w| w[0] < w[1]) {
+            let bits = g.face_bits;
+            crate::radix::sort_by_key(&mut g.entries, |&k| k >> bits);
+        } else {
+            crate::radix::sort_by_key(&mut g.entries, |&k| k);
+        }
         g
     }
 
