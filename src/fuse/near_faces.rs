@@ -60,6 +60,11 @@ impl NearFaces {
         self.region = region;
     }
 
+    /// This round's band faces, binned (after [`NearFaces::update`]).
+    pub(super) fn band_grid(&self) -> Option<&TriangleGrid> {
+        self.band.as_ref()
+    }
+
     /// The near faces sharing a cell with the box `[lo, hi]`, sorted and unique (a superset of
     /// the near faces whose boxes overlap it). Empty before [`NearFaces::update`].
     pub(super) fn faces_in_box(&self, mesh: &TriMesh, lo: DVec3, hi: DVec3) -> Vec<u32> {

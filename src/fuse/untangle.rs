@@ -13,7 +13,7 @@ use super::band_crossings::{Recount, bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
-use crate::mesh_check::{FixedCorners, intersect_moving_corner, triangles_intersect};
+use crate::mesh_check::{FixedCorners, TriangleGrid, intersect_moving_corner, triangles_intersect};
 use glam::DVec3;
 use std::ops::Range;
 
@@ -102,20 +102,33 @@ pub fn untangle_band(
     let mut changed: Vec<u32> = Vec::new();
     let full_budget = TESTS_PER_BAND_FACE * band.len();
     let mut budget = full_budget;
-    let count = |mesh: &TriMesh, pairs: &[(u32, u32)], changed: &mut Vec<u32>, first: bool| {
+    // `binned`: the band faces binned at their current positions, if at hand.
+    let count = |mesh: &TriMesh,
+                 pairs: &[(u32, u32)],
+                 changed: &mut Vec<u32>,
+                 first: bool,
+                 binned: Option<&TriangleGrid>| {
         changed.sort_unstable();
         changed.dedup();
         let out = if first {
             None
         } else {
-            recount.update(mesh, band.clone(), scale, pairs, changed)
+            recount.update(mesh, band.clone(), scale, pairs, changed, binned)
         };
         changed.clear();
-        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale))
+        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale, binned))
     };
     let mut near = NearFaces::default();
     for round in 0..4 {
-        let pairs = count(mesh, &report.crossing_pairs, &mut changed, round == 0);
+        // Binned before the count: the count searches this round's band grid too.
+        near.update(mesh, band.clone(), scale);
+        let pairs = count(
+            mesh,
+            &report.crossing_pairs,
+            &mut changed,
+            round == 0,
+            near.band_grid(),
+        );
         let bad = bad_faces(mesh, band.clone(), &pairs, min_angle_deg);
         if round == 0 {
             report.crossings_before = pairs.len();
@@ -133,7 +146,6 @@ pub fn untangle_band(
         if verts.is_empty() {
             break;
         }
-        near.update(mesh, band.clone(), scale);
         let mut moved = 0;
         for v in verts {
             let k = (v - movable.start) as usize;
@@ -165,7 +177,7 @@ pub fn untangle_band(
     report.tests = full_budget - budget;
     if report.moves > 0 {
         // Recount after the last round's moves.
-        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false);
+        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false, None);
         report.crossings_after = pairs.len();
         report.crossing_pairs = pairs;
         // Within a round the grid does not follow the moves; should a late move have crossed
