@@ -190,38 +190,50 @@ fn one_side(s: [i8; 3]) -> bool {
 /// (the edge tests would each find the same signs), else the edge tests, each edge's corner
 /// signs taken from those computed for the rejection.
 fn disjoint(t1: [DVec3; 3], t2: [DVec3; 3], s1: [i8; 3], one_side_filter: bool) -> bool {
-    let ([a, b, c], [d, e, h]) = (t1, t2);
+    let [a, b, c] = t1;
     if one_side_filter && one_side(s1) {
         return false;
     }
-    let s2 = [o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)];
+    let s2 = [o3(a, b, c, t2[0]), o3(a, b, c, t2[1]), o3(a, b, c, t2[2])];
     if one_side_filter && one_side(s2) {
         return false;
     }
-    seg_tri(a, b, [s1[0], s1[1]], d, e, h)
-        || seg_tri(b, c, [s1[1], s1[2]], d, e, h)
-        || seg_tri(c, a, [s1[2], s1[0]], d, e, h)
-        || seg_tri(d, e, [s2[0], s2[1]], a, b, c)
-        || seg_tri(e, h, [s2[1], s2[2]], a, b, c)
-        || seg_tri(h, d, [s2[2], s2[0]], a, b, c)
+    edges_meet(t1, t2, s1, s2, None)
+}
+
+/// Whether an edge of either triangle meets the other (`s1`, `s2`: each triangle's corners'
+/// signs against the other's plane), edge `skip` of `t1` (from corner `skip` to the next) left
+/// out.
+fn edges_meet(
+    t1: [DVec3; 3],
+    t2: [DVec3; 3],
+    s1: [i8; 3],
+    s2: [i8; 3],
+    skip: Option<usize>,
+) -> bool {
+    let ([a, b, c], [d, e, h]) = (t1, t2);
+    (0..3).any(|k| {
+        Some(k) != skip && seg_tri(t1[k], t1[(k + 1) % 3], [s1[k], s1[(k + 1) % 3]], d, e, h)
+    }) || (0..3).any(|k| seg_tri(t2[k], t2[(k + 1) % 3], [s2[k], s2[(k + 1) % 3]], a, b, c))
 }
 
 /// What [`triangles_intersect`] of a face `f` with one moving corner `v` and a face `g` that
 /// does not move knows before `v` is placed: the signs of `f`'s other corners against `g`'s
-/// plane do not change while `v` moves.
+/// plane, and whether `f`'s edge opposite `v` meets `g`, do not change while `v` moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FixedCorners {
     /// Not looked at yet.
     Unknown,
     /// The faces share a vertex: the test runs in full.
     Shared,
-    /// The signs of `f`'s corners against `g`'s plane, `v`'s slot to be filled.
-    Signs([i8; 3]),
+    /// The signs of `f`'s corners against `g`'s plane (`v`'s slot to be filled), and whether
+    /// the edge opposite `v` meets `g` once tested.
+    Signs([i8; 3], Option<bool>),
 }
 
 /// [`triangles_intersect`]`(mesh, f, g)` where only `f`'s corner `v` moved since `memo` was
 /// filled (`Unknown` the first time): the same answer (every decision is the same exact sign),
-/// with the fixed corners' signs against `g`'s plane taken from `memo`.
+/// with what does not depend on `v` taken from `memo`.
 pub fn intersect_moving_corner(
     mesh: &TriMesh,
     f: usize,
@@ -237,20 +249,37 @@ pub fn intersect_moving_corner(
         *memo = if t1.iter().any(|x| t2.contains(x)) {
             FixedCorners::Shared
         } else {
-            FixedCorners::Signs(t1.map(|x| if x == v { 0 } else { o3(d, e, h, p(x)) }))
+            FixedCorners::Signs(t1.map(|x| if x == v { 0 } else { o3(d, e, h, p(x)) }), None)
         };
     }
-    match *memo {
-        FixedCorners::Signs(mut s1) => {
-            for (k, &x) in t1.iter().enumerate() {
-                if x == v {
-                    s1[k] = o3(d, e, h, tri1[k]);
-                }
-            }
-            disjoint(tri1, tri2, s1, true)
-        }
-        _ => intersect(mesh, f, g, true),
+    let FixedCorners::Signs(mut s1, fixed_edge) = *memo else {
+        return intersect(mesh, f, g, true);
+    };
+    let kv = t1.iter().position(|&x| x == v).unwrap_or(0);
+    s1[kv] = o3(d, e, h, tri1[kv]);
+    let [a, b, c] = tri1;
+    if one_side(s1) {
+        return false;
     }
+    let s2 = [o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)];
+    if one_side(s2) {
+        return false;
+    }
+    // The edge opposite `v`: from the corner after `v` to the one before.
+    let k = (kv + 1) % 3;
+    let meets = fixed_edge.unwrap_or_else(|| {
+        let m = seg_tri(
+            tri1[k],
+            tri1[(k + 1) % 3],
+            [s1[k], s1[(k + 1) % 3]],
+            d,
+            e,
+            h,
+        );
+        *memo = FixedCorners::Signs(s1, Some(m));
+        m
+    });
+    meets || edges_meet(tri1, tri2, s1, s2, Some(k))
 }
 
 /// Whether faces `f` and `g` of `mesh` intersect improperly (beyond their shared vertices).
