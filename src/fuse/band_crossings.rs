@@ -99,27 +99,14 @@ pub(super) fn count_all(
     crossings
 }
 
-/// The faces that are not band faces and lie near the band as it was first counted, binned
-/// once: they never move while the band does.
-pub(super) struct Recount {
-    region: (DVec3, DVec3),
-    others: TriangleGrid,
+/// The faces that are not band faces, binned (they never move while the band does): every
+/// such face whose box meets `region` is in `others`.
+pub(super) struct Recount<'a> {
+    pub(super) region: (DVec3, DVec3),
+    pub(super) others: &'a TriangleGrid,
 }
 
-impl Recount {
-    /// Bins the faces other than `band` within `reach` of the band's box.
-    pub(super) fn new(mesh: &TriMesh, band: Range<usize>, scale: f64, reach: f64) -> Recount {
-        let region = band_region(mesh, band.clone(), reach);
-        let near: Vec<u32> = (0..mesh.triangles.len())
-            .filter(|g| !band.contains(g) && overlap(bbox(mesh, *g), region))
-            .map(|g| g as u32)
-            .collect();
-        Recount {
-            region,
-            others: TriangleGrid::over_region(mesh, &near, region, 2.0 * scale),
-        }
-    }
-
+impl Recount<'_> {
     /// The crossing pairs after the band faces `changed` (sorted, unique) moved, from the pairs
     /// `before` they moved: the pairs of unmoved faces are kept, the moved faces' pairs tested
     /// again. `None` when a moved face left the binned region (count in full then). `binned`:

@@ -9,11 +9,11 @@
 //! budgeted ([`TESTS_PER_BAND_FACE`] per band face): on a band that cannot be untangled the
 //! rounds stop when it is spent, so the work stays proportional to the band whatever the input.
 
-use super::band_crossings::{Recount, bbox, count_all, overlap};
+use super::band_crossings::{bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
-use crate::mesh_check::{FixedCorners, TriangleGrid, intersect_moving_corner, triangles_intersect};
+use crate::mesh_check::{FixedCorners, intersect_moving_corner, triangles_intersect};
 use glam::DVec3;
 use std::ops::Range;
 
@@ -97,37 +97,37 @@ pub fn untangle_band(
     // A vertex whose every candidate lost is tried again only after a neighbour has moved: the
     // work per band face is bounded whatever the input.
     let mut stuck = vec![false; nm];
-    // After the first full count, only the pairs of the faces moved since are tested again.
-    let recount = Recount::new(mesh, band.clone(), scale, 8.0 * scale);
     let mut changed: Vec<u32> = Vec::new();
     let full_budget = TESTS_PER_BAND_FACE * band.len();
     let mut budget = full_budget;
-    // `binned`: the band faces binned at their current positions, if at hand.
+    // After the first full count, only the pairs of the faces moved since are tested again,
+    // searched in the grids `near` binned at the current positions.
     let count = |mesh: &TriMesh,
                  pairs: &[(u32, u32)],
                  changed: &mut Vec<u32>,
                  first: bool,
-                 binned: Option<&TriangleGrid>| {
+                 near: &NearFaces| {
         changed.sort_unstable();
         changed.dedup();
         let out = if first {
             None
         } else {
-            recount.update(mesh, band.clone(), scale, pairs, changed, binned)
+            near.recount()
+                .and_then(|r| r.update(mesh, band.clone(), scale, pairs, changed, near.band_grid()))
         };
         changed.clear();
-        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale, binned))
+        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale, near.band_grid()))
     };
     let mut near = NearFaces::default();
     for round in 0..4 {
-        // Binned before the count: the count searches this round's band grid too.
+        // Binned before the count: the count searches this round's grids too.
         near.update(mesh, band.clone(), scale);
         let pairs = count(
             mesh,
             &report.crossing_pairs,
             &mut changed,
             round == 0,
-            near.band_grid(),
+            &near,
         );
         let bad = bad_faces(mesh, band.clone(), &pairs, min_angle_deg);
         if round == 0 {
@@ -177,7 +177,8 @@ pub fn untangle_band(
     report.tests = full_budget - budget;
     if report.moves > 0 {
         // Recount after the last round's moves.
-        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false, None);
+        near.update(mesh, band.clone(), scale);
+        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false, &near);
         report.crossings_after = pairs.len();
         report.crossing_pairs = pairs;
         // Within a round the grid does not follow the moves; should a late move have crossed
