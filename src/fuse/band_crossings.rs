@@ -34,26 +34,61 @@ pub(super) fn band_region(mesh: &TriMesh, band: Range<usize>, grow: f64) -> (DVe
     (lo - DVec3::splat(grow), hi + DVec3::splat(grow))
 }
 
+/// The band faces binned in cells of `2 * scale` over the band's box grown by a cell, unless
+/// `binned` holds them already (binned at the current positions, over any region: every face
+/// a query finds is checked against the box asked for, so the grid only speeds the search).
+fn band_grid<'a>(
+    mesh: &TriMesh,
+    band: Range<usize>,
+    scale: f64,
+    binned: Option<&'a TriangleGrid>,
+    own: &'a mut Option<TriangleGrid>,
+) -> &'a TriangleGrid {
+    match binned {
+        Some(g) => g,
+        None => {
+            let region = band_region(mesh, band.clone(), 2.0 * scale);
+            let band_faces: Vec<u32> = band.map(|f| f as u32).collect();
+            own.insert(TriangleGrid::over_region(
+                mesh,
+                &band_faces,
+                region,
+                2.0 * scale,
+            ))
+        }
+    }
+}
+
 /// Intersecting pairs with a band face, each once as `(smaller, larger)` face index, sorted.
-pub(super) fn count_all(mesh: &TriMesh, band: Range<usize>, scale: f64) -> Vec<(u32, u32)> {
+/// `binned`: the band faces binned at their current positions, if at hand.
+pub(super) fn count_all(
+    mesh: &TriMesh,
+    band: Range<usize>,
+    scale: f64,
+    binned: Option<&TriangleGrid>,
+) -> Vec<(u32, u32)> {
     let region = band_region(mesh, band.clone(), 2.0 * scale);
-    let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
-    let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
-    // Band–band pairs, then band–other: faces in the band's cells.
+    let mut own = None;
+    let grid = band_grid(mesh, band.clone(), scale, binned, &mut own);
+    // Band–band pairs, then band–other: faces in the band's cells, each pair once (the pairs
+    // are only tested: their order does not matter).
     let mut pairs = grid.candidate_pairs(mesh);
+    let mut hits = Vec::new();
     for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
         let bg = bbox(mesh, g);
         if !overlap(bg, region) {
             continue;
         }
+        hits.clear();
         grid.for_each_in_box(bg.0, bg.1, |f| {
             if overlap(bbox(mesh, f as usize), bg) {
-                pairs.push((f, g as u32));
+                hits.push(f);
             }
         });
+        hits.sort_unstable();
+        hits.dedup();
+        pairs.extend(hits.iter().map(|&f| (f, g as u32)));
     }
-    pairs.sort_unstable();
-    pairs.dedup();
     let mut crossings: Vec<(u32, u32)> = pairs
         .into_iter()
         .filter(|&(f, g)| triangles_intersect(mesh, f as usize, g as usize))
@@ -64,30 +99,18 @@ pub(super) fn count_all(mesh: &TriMesh, band: Range<usize>, scale: f64) -> Vec<(
     crossings
 }
 
-/// The faces that are not band faces and lie near the band as it was first counted, binned
-/// once: they never move while the band does.
-pub(super) struct Recount {
-    region: (DVec3, DVec3),
-    others: TriangleGrid,
+/// The faces that are not band faces, binned (they never move while the band does): every
+/// such face whose box meets `region` is in `others`.
+pub(super) struct Recount<'a> {
+    pub(super) region: (DVec3, DVec3),
+    pub(super) others: &'a TriangleGrid,
 }
 
-impl Recount {
-    /// Bins the faces other than `band` within `reach` of the band's box.
-    pub(super) fn new(mesh: &TriMesh, band: Range<usize>, scale: f64, reach: f64) -> Recount {
-        let region = band_region(mesh, band.clone(), reach);
-        let near: Vec<u32> = (0..mesh.triangles.len())
-            .filter(|g| !band.contains(g) && overlap(bbox(mesh, *g), region))
-            .map(|g| g as u32)
-            .collect();
-        Recount {
-            region,
-            others: TriangleGrid::over_region(mesh, &near, region, 2.0 * scale),
-        }
-    }
-
+impl Recount<'_> {
     /// The crossing pairs after the band faces `changed` (sorted, unique) moved, from the pairs
     /// `before` they moved: the pairs of unmoved faces are kept, the moved faces' pairs tested
-    /// again. `None` when a moved face left the binned region (count in full then).
+    /// again. `None` when a moved face left the binned region (count in full then). `binned`:
+    /// the band faces binned at their current positions, if at hand.
     pub(super) fn update(
         &self,
         mesh: &TriMesh,
@@ -95,6 +118,7 @@ impl Recount {
         scale: f64,
         before: &[(u32, u32)],
         changed: &[u32],
+        binned: Option<&TriangleGrid>,
     ) -> Option<Vec<(u32, u32)>> {
         if changed.is_empty() {
             return Some(before.to_vec());
@@ -109,9 +133,8 @@ impl Recount {
             .copied()
             .filter(|&(f, g)| !moved(f) && !moved(g))
             .collect();
-        let region = band_region(mesh, band.clone(), 2.0 * scale);
-        let band_faces: Vec<u32> = band.map(|f| f as u32).collect();
-        let grid = TriangleGrid::over_region(mesh, &band_faces, region, 2.0 * scale);
+        let mut own = None;
+        let grid = band_grid(mesh, band, scale, binned, &mut own);
         let mut tests: Vec<(u32, u32)> = Vec::new();
         for (&f, &bf) in changed.iter().zip(&boxes) {
             grid.for_each_in_box(bf.0, bf.1, |g| {

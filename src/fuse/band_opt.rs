@@ -76,7 +76,7 @@ fn flip_pass_where(
     let in_band = |f: usize| band.contains(&f);
     let mut flips = 0;
     let mut keys: Vec<(u32, u32)> = edges.keys().copied().collect();
-    keys.sort_unstable();
+    crate::radix::sort_by_key(&mut keys, |&(a, b)| (a as u64) << 32 | b as u64);
     for e in keys {
         let (f, g) = match edges.get(&e) {
             Some(fs) if fs.count == 2 && in_band(fs.faces[0]) && in_band(fs.faces[1]) => {

@@ -2,7 +2,7 @@
 //! band never move while the untangling runs, so they are binned once; only the band faces are
 //! binned anew each round.
 
-use super::band_crossings::{band_region, bbox, overlap};
+use super::band_crossings::{Recount, band_region, bbox, overlap};
 use crate::mesh::TriMesh;
 use crate::mesh_check::TriangleGrid;
 use glam::DVec3;
@@ -58,6 +58,20 @@ impl NearFaces {
         let band_faces: Vec<u32> = band.map(|f| f as u32).collect();
         self.band = Some(TriangleGrid::over_region(mesh, &band_faces, all, cell));
         self.region = region;
+    }
+
+    /// This round's band faces, binned (after [`NearFaces::update`]).
+    pub(super) fn band_grid(&self) -> Option<&TriangleGrid> {
+        self.band.as_ref()
+    }
+
+    /// The faces off the band binned for the recount: every one whose box meets the region
+    /// covered, which holds this round's band (after [`NearFaces::update`]).
+    pub(super) fn recount(&self) -> Option<Recount<'_>> {
+        self.fixed.as_ref().map(|f| Recount {
+            region: f.covered,
+            others: &f.grid,
+        })
     }
 
     /// The near faces sharing a cell with the box `[lo, hi]`, sorted and unique (a superset of

@@ -9,11 +9,11 @@
 //! budgeted ([`TESTS_PER_BAND_FACE`] per band face): on a band that cannot be untangled the
 //! rounds stop when it is spent, so the work stays proportional to the band whatever the input.
 
-use super::band_crossings::{Recount, bbox, count_all, overlap};
+use super::band_crossings::{bbox, count_all, overlap};
 use super::band_opt::min_angle;
 use super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
-use crate::mesh_check::triangles_intersect;
+use crate::mesh_check::{FixedCorners, intersect_moving_corner, triangles_intersect};
 use glam::DVec3;
 use std::ops::Range;
 
@@ -97,25 +97,38 @@ pub fn untangle_band(
     // A vertex whose every candidate lost is tried again only after a neighbour has moved: the
     // work per band face is bounded whatever the input.
     let mut stuck = vec![false; nm];
-    // After the first full count, only the pairs of the faces moved since are tested again.
-    let recount = Recount::new(mesh, band.clone(), scale, 8.0 * scale);
     let mut changed: Vec<u32> = Vec::new();
     let full_budget = TESTS_PER_BAND_FACE * band.len();
     let mut budget = full_budget;
-    let count = |mesh: &TriMesh, pairs: &[(u32, u32)], changed: &mut Vec<u32>, first: bool| {
+    // After the first full count, only the pairs of the faces moved since are tested again,
+    // searched in the grids `near` binned at the current positions.
+    let count = |mesh: &TriMesh,
+                 pairs: &[(u32, u32)],
+                 changed: &mut Vec<u32>,
+                 first: bool,
+                 near: &NearFaces| {
         changed.sort_unstable();
         changed.dedup();
         let out = if first {
             None
         } else {
-            recount.update(mesh, band.clone(), scale, pairs, changed)
+            near.recount()
+                .and_then(|r| r.update(mesh, band.clone(), scale, pairs, changed, near.band_grid()))
         };
         changed.clear();
-        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale))
+        out.unwrap_or_else(|| count_all(mesh, band.clone(), scale, near.band_grid()))
     };
     let mut near = NearFaces::default();
     for round in 0..4 {
-        let pairs = count(mesh, &report.crossing_pairs, &mut changed, round == 0);
+        // Binned before the count: the count searches this round's grids too.
+        near.update(mesh, band.clone(), scale);
+        let pairs = count(
+            mesh,
+            &report.crossing_pairs,
+            &mut changed,
+            round == 0,
+            &near,
+        );
         let bad = bad_faces(mesh, band.clone(), &pairs, min_angle_deg);
         if round == 0 {
             report.crossings_before = pairs.len();
@@ -133,7 +146,6 @@ pub fn untangle_band(
         if verts.is_empty() {
             break;
         }
-        near.update(mesh, band.clone(), scale);
         let mut moved = 0;
         for v in verts {
             let k = (v - movable.start) as usize;
@@ -165,7 +177,8 @@ pub fn untangle_band(
     report.tests = full_budget - budget;
     if report.moves > 0 {
         // Recount after the last round's moves.
-        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false);
+        near.update(mesh, band.clone(), scale);
+        let pairs = count(mesh, &report.crossing_pairs, &mut changed, false, &near);
         report.crossings_after = pairs.len();
         report.crossing_pairs = pairs;
         // Within a round the grid does not follow the moves; should a late move have crossed
@@ -217,14 +230,18 @@ fn bad_faces(
 }
 
 /// The faces around a star, split once per vertex: the other faces (which do not move while
-/// the star's vertex does) with their boxes, and the star's own faces among them by star index.
+/// the star's vertex `v` does) with their boxes, and the star's own faces among them by star
+/// index; `fixed[k * others.len() + j]` what the test of star face `k` with other face `j`
+/// knows of the star face's fixed corners (filled as the pairs are first tested).
 struct Around {
+    v: u32,
     others: Vec<(u32, (DVec3, DVec3))>,
     star_members: Vec<usize>,
+    fixed: Vec<FixedCorners>,
 }
 
 impl Around {
-    fn new(mesh: &TriMesh, star: &[u32], faces: &[u32]) -> Around {
+    fn new(mesh: &TriMesh, v: u32, star: &[u32], faces: &[u32]) -> Around {
         let mut others = Vec::with_capacity(faces.len());
         let mut star_members = Vec::new();
         for &g in faces {
@@ -234,6 +251,8 @@ impl Around {
             }
         }
         Around {
+            v,
+            fixed: vec![FixedCorners::Unknown; star.len() * others.len()],
             others,
             star_members,
         }
@@ -271,7 +290,7 @@ fn score(
     mesh: &TriMesh,
     star: &[u32],
     normals: &[DVec3],
-    around: &Around,
+    around: &mut Around,
     max_folded: usize,
     beat: Option<Key>,
     budget: &mut usize,
@@ -297,25 +316,33 @@ fn score(
         Some(b) => b.0.checked_sub(1)?,
     };
     let mut crossings = 0;
-    let mut count = |f: u32, g: u32| {
+    // Each exact test spends one of the budget; true when the candidate is out.
+    let mut count = |hit: &mut dyn FnMut() -> bool| {
         if *budget == 0 {
             return true;
         }
         *budget -= 1;
-        if triangles_intersect(mesh, f as usize, g as usize) {
+        if hit() {
             crossings += 1;
         }
         crossings > max_crossings
     };
+    let n_others = around.others.len();
     for (k, &f) in star.iter().enumerate() {
         let bf = boxes[k];
-        for &(g, bg) in &around.others {
-            if overlap(bf, bg) && count(f, g) {
+        let memo = &mut around.fixed[k * n_others..(k + 1) * n_others];
+        for (&(g, bg), m) in around.others.iter().zip(memo) {
+            if overlap(bf, bg)
+                && count(&mut || intersect_moving_corner(mesh, f as usize, g as usize, around.v, m))
+            {
                 return None;
             }
         }
         for &j in &around.star_members {
-            if j > k && overlap(bf, boxes[j]) && count(f, star[j]) {
+            if j > k
+                && overlap(bf, boxes[j])
+                && count(&mut || triangles_intersect(mesh, f as usize, star[j] as usize))
+            {
                 return None;
             }
         }
@@ -362,8 +389,13 @@ fn improve_vertex(
         hi = hi.max(mesh.positions[w as usize]);
     }
     let grow = DVec3::splat(0.5 * scale);
-    let around = Around::new(mesh, star, &near.faces_in_box(mesh, lo - grow, hi + grow));
-    let Some(current) = score(mesh, star, &normals, &around, usize::MAX, None, budget) else {
+    let mut around = Around::new(
+        mesh,
+        v,
+        star,
+        &near.faces_in_box(mesh, lo - grow, hi + grow),
+    );
+    let Some(current) = score(mesh, star, &normals, &mut around, usize::MAX, None, budget) else {
         return false;
     };
     let centroid = ring
@@ -435,7 +467,7 @@ fn improve_vertex(
             mesh,
             star,
             &normals,
-            &around,
+            &mut around,
             current.1,
             Some(best.0),
             budget,

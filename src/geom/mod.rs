@@ -82,9 +82,69 @@ pub fn principal_axis(points: &[DVec3]) -> Option<(DVec3, DVec3)> {
     Some((c, DVec3::new(a[0], a[1], a[2]).normalize()))
 }
 
+/// `x.floor() as i64` (saturating, 0 for NaN) without the library call that `floor` is on
+/// targets without a rounding instruction: the conversion truncates toward zero, and one is
+/// taken off where that rounded a negative fraction up.
+#[inline(always)]
+pub(crate) fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// `x.ceil() as i64` (saturating, 0 for NaN) the same way as [`floor_i64`].
+#[inline(always)]
+pub(crate) fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) < x {
+        t.saturating_add(1)
+    } else {
+        t
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::round;
+    use super::{ceil_i64, floor_i64, round};
+
+    /// The same as `floor`/`ceil` then the saturating conversion: fractions and integers of
+    /// both signs, zeros, values near and beyond the `i64` range, infinities and NaN.
+    #[test]
+    fn floor_and_ceil_i64_equal_the_library_then_cast() {
+        let mut rng = crate::phantom::rng::Rng::new(4);
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1e-300,
+            f64::MIN_POSITIVE,
+            9.2e18,
+            -9.2e18,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            i64::MAX as f64,
+            i64::MIN as f64,
+        ];
+        for _ in 0..100_000 {
+            let x = rng.range(-1e3, 1e3);
+            xs.extend([x, x.round(), x * 1e-6, x * 1e15]);
+        }
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x:e}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "{x:e}");
+        }
+    }
 
     #[test]
     fn round_is_f64_round_bit_for_bit() {

@@ -1,7 +1,7 @@
 //! A uniform grid of triangle bounding boxes: candidate pairs for intersection tests and
 //! ring-by-ring nearest-triangle search. Deterministic (sorted vectors, no hashing).
 
-use crate::geom::closest_point_on_triangle;
+use crate::geom::{closest_point_on_triangle, floor_i64};
 use crate::mesh::TriMesh;
 use glam::DVec3;
 
@@ -81,7 +81,14 @@ impl TriangleGrid {
                 }
             }
         }
-        crate::radix::sort_by_key(&mut g.entries, |&k| k);
+        // Entries are pushed face by face: for faces in increasing order they are sorted by
+        // face already, and a stable sort by cell alone gives the order by (cell, face).
+        if faces.windows(2).all(|w| w[0] < w[1]) {
+            let bits = g.face_bits;
+            crate::radix::sort_by_key(&mut g.entries, |&k| k >> bits);
+        } else {
+            crate::radix::sort_by_key(&mut g.entries, |&k| k);
+        }
         g
     }
 
@@ -95,7 +102,7 @@ impl TriangleGrid {
 
     fn index_unclamped(&self, p: DVec3) -> [i64; 3] {
         let q = (p - self.origin) / self.cell;
-        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+        [floor_i64(q.x), floor_i64(q.y), floor_i64(q.z)]
     }
 
     fn index_of(&self, p: DVec3) -> [i64; 3] {
@@ -144,37 +151,52 @@ impl TriangleGrid {
     }
 
     /// Face pairs `(f, g)`, `f < g`, sharing at least one cell and with overlapping bounding
-    /// boxes; sorted and unique.
+    /// boxes; sorted and unique. Each pair is taken in one cell only: the cell of the lowest
+    /// corner of the two boxes' overlap, which both faces are binned in (the cell index of a
+    /// coordinate never decreases as the coordinate grows), so no pair is found twice.
     pub fn candidate_pairs(&self, mesh: &TriMesh) -> Vec<(u32, u32)> {
         let bbox = |f: u32| {
             let [a, b, c] = mesh.corners(f as usize);
             (a.min(b).min(c), a.max(b).max(c))
         };
-        let mut pairs = Vec::new();
+        let mut keys: Vec<u64> = Vec::new();
+        // One cell's faces: each with its box and the cell of its box's lower corner.
+        let mut run: Vec<(u32, (DVec3, DVec3), [i64; 3])> = Vec::new();
         let mut i = 0;
         while i < self.entries.len() {
-            let mut j = i;
             let id = self.cell_of_entry(self.entries[i]);
-            while j < self.entries.len() && self.cell_of_entry(self.entries[j]) == id {
-                j += 1;
+            run.clear();
+            while i < self.entries.len() && self.cell_of_entry(self.entries[i]) == id {
+                let f = self.face_of_entry(self.entries[i]);
+                let b = bbox(f);
+                run.push((f, b, self.index_of(b.0)));
+                i += 1;
             }
-            let run = &self.entries[i..j];
-            for (k, &ef) in run.iter().enumerate() {
-                let f = self.face_of_entry(ef);
-                let (fl, fh) = bbox(f);
-                for &eg in &run[k + 1..] {
-                    let g = self.face_of_entry(eg);
-                    let (gl, gh) = bbox(g);
-                    if fl.cmple(gh).all() && gl.cmple(fh).all() {
-                        pairs.push((f.min(g), f.max(g)));
+            let at = self.coords(id);
+            for (k, &(f, (fl, fh), fi)) in run.iter().enumerate() {
+                for &(g, (gl, gh), gi) in &run[k + 1..] {
+                    if fl.cmple(gh).all()
+                        && gl.cmple(fh).all()
+                        && (0..3).all(|a| fi[a].max(gi[a]) == at[a])
+                    {
+                        let (lo, hi) = (f.min(g) as u64, f.max(g) as u64);
+                        keys.push(lo << self.face_bits | hi);
                     }
                 }
             }
-            i = j;
         }
-        pairs.sort_unstable();
-        pairs.dedup();
-        pairs
+        crate::radix::sort_by_key(&mut keys, |&k| k);
+        keys.dedup();
+        keys.into_iter()
+            .map(|k| ((k >> self.face_bits) as u32, self.face_of_entry(k)))
+            .collect()
+    }
+
+    /// The cell coordinates of cell `id`.
+    fn coords(&self, id: u64) -> [i64; 3] {
+        let id = id as i64;
+        let (x, yz) = (id % self.dims[0], id / self.dims[0]);
+        [x, yz % self.dims[1], yz / self.dims[1]]
     }
 
     /// The nearest point of the mesh surface to `p`: `(distance, face, closest point)`, or

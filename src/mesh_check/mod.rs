@@ -8,7 +8,9 @@ mod tri_tri;
 
 pub use distance::SurfaceDistance;
 pub use grid::TriangleGrid;
-pub use tri_tri::{TrianglePairKind, pair_kind, triangles_intersect};
+pub use tri_tri::{
+    FixedCorners, TrianglePairKind, intersect_moving_corner, pair_kind, triangles_intersect,
+};
 
 use crate::mesh::TriMesh;
 

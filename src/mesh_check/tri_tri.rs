@@ -137,10 +137,9 @@ fn point_in_tri_2d(pr: Proj, p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
     (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0)
 }
 
-/// Closed segment `pq` against closed triangle `abc`.
-fn seg_tri(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let sp = o3(a, b, c, p);
-    let sq = o3(a, b, c, q);
+/// Closed segment `pq` against closed triangle `abc`, given the signs `sp`, `sq` of `p` and
+/// `q` against the triangle's plane (`o3(a, b, c, p)`, `o3(a, b, c, q)`).
+fn seg_tri(p: DVec3, q: DVec3, [sp, sq]: [i8; 2], a: DVec3, b: DVec3, c: DVec3) -> bool {
     if sp == sq && sp != 0 {
         return false;
     }
@@ -181,6 +180,108 @@ fn in_sector(pr: Proj, v: DVec3, a: DVec3, b: DVec3, x: DVec3) -> bool {
     s1 == s && s2 == s
 }
 
+/// Whether the signs are all equal and not zero (a triangle strictly on one side of a plane).
+fn one_side(s: [i8; 3]) -> bool {
+    s[0] != 0 && s[0] == s[1] && s[1] == s[2]
+}
+
+/// Two faces sharing no vertex, given the signs `s1` of the first's corners against the
+/// second's plane: a triangle strictly on one side of the other's plane meets nothing of it
+/// (the edge tests would each find the same signs), else the edge tests, each edge's corner
+/// signs taken from those computed for the rejection.
+fn disjoint(t1: [DVec3; 3], t2: [DVec3; 3], s1: [i8; 3], one_side_filter: bool) -> bool {
+    let [a, b, c] = t1;
+    if one_side_filter && one_side(s1) {
+        return false;
+    }
+    let s2 = [o3(a, b, c, t2[0]), o3(a, b, c, t2[1]), o3(a, b, c, t2[2])];
+    if one_side_filter && one_side(s2) {
+        return false;
+    }
+    edges_meet(t1, t2, s1, s2, None)
+}
+
+/// Whether an edge of either triangle meets the other (`s1`, `s2`: each triangle's corners'
+/// signs against the other's plane), edge `skip` of `t1` (from corner `skip` to the next) left
+/// out.
+fn edges_meet(
+    t1: [DVec3; 3],
+    t2: [DVec3; 3],
+    s1: [i8; 3],
+    s2: [i8; 3],
+    skip: Option<usize>,
+) -> bool {
+    let ([a, b, c], [d, e, h]) = (t1, t2);
+    (0..3).any(|k| {
+        Some(k) != skip && seg_tri(t1[k], t1[(k + 1) % 3], [s1[k], s1[(k + 1) % 3]], d, e, h)
+    }) || (0..3).any(|k| seg_tri(t2[k], t2[(k + 1) % 3], [s2[k], s2[(k + 1) % 3]], a, b, c))
+}
+
+/// What [`triangles_intersect`] of a face `f` with one moving corner `v` and a face `g` that
+/// does not move knows before `v` is placed: the signs of `f`'s other corners against `g`'s
+/// plane, and whether `f`'s edge opposite `v` meets `g`, do not change while `v` moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FixedCorners {
+    /// Not looked at yet.
+    Unknown,
+    /// The faces share a vertex: the test runs in full.
+    Shared,
+    /// The signs of `f`'s corners against `g`'s plane (`v`'s slot to be filled), and whether
+    /// the edge opposite `v` meets `g` once tested.
+    Signs([i8; 3], Option<bool>),
+}
+
+/// [`triangles_intersect`]`(mesh, f, g)` where only `f`'s corner `v` moved since `memo` was
+/// filled (`Unknown` the first time): the same answer (every decision is the same exact sign),
+/// with what does not depend on `v` taken from `memo`.
+pub fn intersect_moving_corner(
+    mesh: &TriMesh,
+    f: usize,
+    g: usize,
+    v: u32,
+    memo: &mut FixedCorners,
+) -> bool {
+    let (t1, t2) = (mesh.triangles[f], mesh.triangles[g]);
+    let p = |v: u32| mesh.positions[v as usize];
+    let (tri1, tri2) = (t1.map(p), t2.map(p));
+    let [d, e, h] = tri2;
+    if *memo == FixedCorners::Unknown {
+        *memo = if t1.iter().any(|x| t2.contains(x)) {
+            FixedCorners::Shared
+        } else {
+            FixedCorners::Signs(t1.map(|x| if x == v { 0 } else { o3(d, e, h, p(x)) }), None)
+        };
+    }
+    let FixedCorners::Signs(mut s1, fixed_edge) = *memo else {
+        return intersect(mesh, f, g, true);
+    };
+    let kv = t1.iter().position(|&x| x == v).unwrap_or(0);
+    s1[kv] = o3(d, e, h, tri1[kv]);
+    let [a, b, c] = tri1;
+    if one_side(s1) {
+        return false;
+    }
+    let s2 = [o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)];
+    if one_side(s2) {
+        return false;
+    }
+    // The edge opposite `v`: from the corner after `v` to the one before.
+    let k = (kv + 1) % 3;
+    let meets = fixed_edge.unwrap_or_else(|| {
+        let m = seg_tri(
+            tri1[k],
+            tri1[(k + 1) % 3],
+            [s1[k], s1[(k + 1) % 3]],
+            d,
+            e,
+            h,
+        );
+        *memo = FixedCorners::Signs(s1, Some(m));
+        m
+    });
+    meets || edges_meet(tri1, tri2, s1, s2, Some(k))
+}
+
 /// Whether faces `f` and `g` of `mesh` intersect improperly (beyond their shared vertices).
 pub fn triangles_intersect(mesh: &TriMesh, f: usize, g: usize) -> bool {
     intersect(mesh, f, g, true)
@@ -204,21 +305,8 @@ fn intersect(mesh: &TriMesh, f: usize, g: usize, one_side_filter: bool) -> bool 
         0 => {
             let [a, b, c] = t1.map(p);
             let [d, e, h] = t2.map(p);
-            // A triangle strictly on one side of the other's plane meets nothing of it (the
-            // edge tests below would each find the same signs): 3 signs instead of 12.
-            let one_side = |s: [i8; 3]| s[0] != 0 && s[0] == s[1] && s[1] == s[2];
-            if one_side_filter
-                && (one_side([o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)])
-                    || one_side([o3(a, b, c, d), o3(a, b, c, e), o3(a, b, c, h)]))
-            {
-                return false;
-            }
-            seg_tri(a, b, d, e, h)
-                || seg_tri(b, c, d, e, h)
-                || seg_tri(c, a, d, e, h)
-                || seg_tri(d, e, a, b, c)
-                || seg_tri(e, h, a, b, c)
-                || seg_tri(h, d, a, b, c)
+            let s1 = [o3(d, e, h, a), o3(d, e, h, b), o3(d, e, h, c)];
+            disjoint([a, b, c], [d, e, h], s1, one_side_filter)
         }
         1 => {
             let v = shared[0];
@@ -236,7 +324,7 @@ fn intersect(mesh: &TriMesh, f: usize, g: usize, one_side_filter: bool) -> bool 
             if one_side_filter && ((sc != 0 && sc == sd) || (sa != 0 && sa == sb)) {
                 return false;
             }
-            if seg_tri(pa, pb, pv, pc, pd) || seg_tri(pc, pd, pv, pa, pb) {
+            if seg_tri(pa, pb, [sa, sb], pv, pc, pd) || seg_tri(pc, pd, [sc, sd], pv, pa, pb) {
                 return true;
             }
             let coplanar = sc == 0 && sd == 0;
@@ -319,6 +407,36 @@ mod tests {
             answered > 150_000 && gave_up > 50_000,
             "{answered} {gave_up}"
         );
+    }
+
+    /// The memoized test answers as the full one while one corner moves: random lattice pairs
+    /// (many coplanar, touching and shared-vertex cases), the memo filled at the first
+    /// position and kept over the moves of corner 0; both answers occur often.
+    #[test]
+    fn moving_corner_memo_is_exact() {
+        let mut rng = crate::phantom::rng::Rng::new(9);
+        let mut next = |n: u64| rng.below(n as usize) as u64;
+        let mut hits = [0usize; 2];
+        for _ in 0..20_000 {
+            let mut positions: Vec<DVec3> = (0..6)
+                .map(|_| DVec3::new(next(4) as f64, next(4) as f64, next(3) as f64 * 0.5))
+                .collect();
+            let t2 = match next(3) {
+                0 => [3, 4, 5],
+                1 => [1, 4, 5],
+                _ => [2, 1, 5],
+            };
+            let mut mesh = TriMesh::new(positions.clone(), vec![[0, 1, 2], t2]);
+            let mut memo = FixedCorners::Unknown;
+            for _ in 0..8 {
+                positions[0] = DVec3::new(next(4) as f64, next(4) as f64, next(3) as f64 * 0.5);
+                mesh.positions[0] = positions[0];
+                let memoized = intersect_moving_corner(&mesh, 0, 1, 0, &mut memo);
+                assert_eq!(memoized, triangles_intersect(&mesh, 0, 1), "{mesh:?}");
+                hits[memoized as usize] += 1;
+            }
+        }
+        assert!(hits[0] > 10_000 && hits[1] > 10_000, "{hits:?}");
     }
 
     /// The one-side rejection changes no answer: random pairs of faces on a coarse integer

@@ -405,7 +405,8 @@ pub fn harmonic(
             edges.push((j, i, w));
         }
     }
-    edges.sort_by_key(|e| (e.0, e.1));
+    // Stable: the weights of an edge are summed in the order they were pushed.
+    crate::radix::sort_by_key(&mut edges, |e| (e.0 as u64) << 32 | e.1 as u64);
     let mut start = vec![0usize; n + 1];
     let mut adj: Vec<(u32, f64)> = Vec::with_capacity(edges.len() / 2);
     let mut k = 0;

@@ -3,6 +3,7 @@
 //! bottom, points kept clear of loop vertices and edges so no sliver forms against a loop.
 
 use super::chart::wrap;
+use crate::geom::{ceil_i64, floor_i64};
 
 /// Options of the chart sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +46,8 @@ impl Grid {
 
     fn cell_of(&self, p: [f64; 2]) -> (i64, i64) {
         (
-            (p[0].rem_euclid(self.period) / self.cw).floor() as i64,
-            ((p[1] - self.y0) / self.ch).floor() as i64,
+            floor_i64(p[0].rem_euclid(self.period) / self.cw),
+            floor_i64((p[1] - self.y0) / self.ch),
         )
     }
 
@@ -59,8 +60,8 @@ impl Grid {
 
     /// Inserts `id` into every cell overlapping the box of `a`–`b` (`b` unwrapped near `a`).
     fn insert_box(&mut self, id: u32, a: [f64; 2], b: [f64; 2]) {
-        let fx = |x: f64| (x / self.cw).floor() as i64;
-        let fy = |y: f64| ((y - self.y0) / self.ch).floor() as i64;
+        let fx = |x: f64| floor_i64(x / self.cw);
+        let fy = |y: f64| floor_i64((y - self.y0) / self.ch);
         let (x0, x1) = (fx(a[0].min(b[0])), fx(a[0].max(b[0])));
         let (y0, y1) = (fy(a[1].min(b[1])), fy(a[1].max(b[1])));
         for cy in y0..=y1 {
@@ -152,8 +153,8 @@ impl Lattice {
                 continue;
             }
             let shift = self.shift(k);
-            let jlo = ((p[1] - r) / self.step - shift).floor() as i64;
-            let jhi = ((p[1] + r) / self.step - shift).ceil() as i64;
+            let jlo = floor_i64((p[1] - r) / self.step - shift);
+            let jhi = ceil_i64((p[1] + r) / self.step - shift);
             for &(j0, first, n) in &self.runs[k] {
                 for j in jlo.max(j0)..=jhi.min(j0 + n as i64 - 1) {
                     let dy = (j as f64 + shift) * self.step - p[1];
@@ -265,8 +266,8 @@ fn candidates(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
             }
             y_lo = y_lo.min(bottom.0);
             y_hi = y_hi.max(top.0);
-            let j0 = (bottom.0 / step - shift).floor() as i64 + 1;
-            let j1 = (top.0 / step - shift).ceil() as i64 - 1;
+            let j0 = floor_i64(bottom.0 / step - shift) + 1;
+            let j1 = ceil_i64(top.0 / step - shift) - 1;
             for j in j0..=j1 {
                 let y = (j as f64 + shift) * step;
                 if y <= bottom.0 || y >= top.0 {
