@@ -328,16 +328,17 @@ struct CrownForm {
 fn crown_form(ty: ToothType, jaw: Jaw, top: f64, (a, b): (f64, f64), rng: &mut Rng) -> CrownForm {
     let mut cusps = Vec::new();
     let mut grooves = Vec::new();
-    let (exponent, cervical, occl_md, occl_bl, table, edge_round, incisal);
+    // Cross-section exponent, cervical and occlusal (mesiodistal, buccolingual) width ratios,
+    // the occlusal table's drop below the crown's top, the edge rounding; incisal or not.
+    let (exponent, cervical, occl_md, occl_bl, drop, edge_round, incisal) = match ty {
+        ToothType::Incisor => (2.3, 0.70, 0.92, 0.22, 0.0, 0.6, true),
+        ToothType::Canine => (2.2, 0.68, 0.80, 0.45, 2.2, 0.8, false),
+        ToothType::Premolar => (2.4, 0.70, 0.82, 0.80, 2.0, 0.9, false),
+        ToothType::Molar => (2.8, 0.74, 0.84, 0.80, 2.2, 1.0, false),
+    };
+    let table = top - drop;
     match ty {
         ToothType::Incisor => {
-            exponent = 2.3;
-            cervical = 0.70;
-            occl_md = 0.92;
-            occl_bl = 0.22;
-            table = top;
-            edge_round = 0.6;
-            incisal = true;
             // Mamelons: three tiny lobes on the incisal edge.
             for k in [-1.0, 0.0, 1.0] {
                 cusps.push(Cusp {
@@ -349,13 +350,6 @@ fn crown_form(ty: ToothType, jaw: Jaw, top: f64, (a, b): (f64, f64), rng: &mut R
             }
         }
         ToothType::Canine => {
-            exponent = 2.2;
-            cervical = 0.68;
-            occl_md = 0.80;
-            occl_bl = 0.45;
-            table = top - 2.2;
-            edge_round = 0.8;
-            incisal = false;
             cusps.push(Cusp {
                 x: -0.08 * a,
                 y: 0.1 * b,
@@ -364,13 +358,6 @@ fn crown_form(ty: ToothType, jaw: Jaw, top: f64, (a, b): (f64, f64), rng: &mut R
             });
         }
         ToothType::Premolar => {
-            exponent = 2.4;
-            cervical = 0.70;
-            occl_md = 0.82;
-            occl_bl = 0.80;
-            table = top - 2.0;
-            edge_round = 0.9;
-            incisal = false;
             let lingual = if jaw == Jaw::Lower { 0.9 } else { 1.6 };
             cusps.push(Cusp {
                 x: 0.0,
@@ -392,13 +379,6 @@ fn crown_form(ty: ToothType, jaw: Jaw, top: f64, (a, b): (f64, f64), rng: &mut R
             });
         }
         ToothType::Molar => {
-            exponent = 2.8;
-            cervical = 0.74;
-            occl_md = 0.84;
-            occl_bl = 0.80;
-            table = top - 2.2;
-            edge_round = 1.0;
-            incisal = false;
             let pts: &[(f64, f64, f64)] = if jaw == Jaw::Upper {
                 &[
                     (-0.45, 0.45, 2.0),
