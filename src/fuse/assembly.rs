@@ -32,6 +32,32 @@ struct CrownSide {
     ios_vertex: Vec<u32>,
 }
 
+impl CrownSide {
+    /// This crown's fringe trimmed for the `listed` faces ([`super::fringe::trim_fringe`]) by
+    /// the first of `modes` that removes anything; `None` for an empty list or when none does.
+    fn trim(
+        &self,
+        ct: &CutTooth,
+        reach: f64,
+        listed: &[u32],
+        modes: &[Listed],
+    ) -> Option<(TriMesh, Vec<u32>, super::fringe::FringeTrim)> {
+        if listed.is_empty() {
+            return None;
+        }
+        modes.iter().find_map(|&mode| {
+            super::fringe::trim_fringe(
+                &self.crown,
+                &self.ios_vertex,
+                &ct.dist_in,
+                reach,
+                listed,
+                mode,
+            )
+        })
+    }
+}
+
 /// Crown + band + root of one attempt, with what the untangling left.
 struct Assembled {
     mesh: TriMesh,
@@ -206,17 +232,7 @@ fn retrim(
     hits: &[u32],
     reach: f64,
 ) -> Option<(TriMesh, Vec<u32>, super::fringe::FringeTrim)> {
-    let trim = |listed: &[u32], mode| {
-        super::fringe::trim_fringe(
-            &side.crown,
-            &side.ios_vertex,
-            &ct.dist_in,
-            reach,
-            listed,
-            mode,
-        )
-    };
-    let r = trim(hits, Listed::Within).or_else(|| trim(hits, Listed::Apex));
+    let r = side.trim(ct, reach, hits, &[Listed::Within, Listed::Apex]);
     if r.is_some() {
         return r;
     }
@@ -225,11 +241,11 @@ fn retrim(
     pierced.sort_unstable();
     pierced.dedup();
     let r = if pierced.len() > hits.len() {
-        trim(&pierced, Listed::Within).or_else(|| trim(&pierced, Listed::Apex))
+        side.trim(ct, reach, &pierced, &[Listed::Within, Listed::Apex])
     } else {
         None
     };
-    r.or_else(|| trim(&pierced, Listed::MarginEdge))
+    r.or_else(|| side.trim(ct, reach, &pierced, &[Listed::MarginEdge]))
 }
 
 /// After the builds, for a kept build still crossed: its crown loses the faces on its pierced
@@ -287,28 +303,23 @@ fn polish_step(
     a: &Assembled,
     side: &CrownSide,
 ) -> Result<Option<(Assembled, CrownSide, super::fringe::FringeTrim)>> {
-    let trim = |listed: &[u32], mode| {
-        if listed.is_empty() {
-            return None;
-        }
-        super::fringe::trim_fringe(
-            &side.crown,
-            &side.ios_vertex,
-            &ct.dist_in,
-            opts.fringe_reach_mm,
-            listed,
-            mode,
-        )
-    };
-    let n = side.crown.positions.len();
+    let (n, reach) = (side.crown.positions.len(), opts.fringe_reach_mm);
     for stage in 0..2 {
         let cut = if stage == 0 {
-            trim(&pierced_margin_faces(a, n), Listed::MarginEdge)
+            side.trim(
+                ct,
+                reach,
+                &pierced_margin_faces(a, n),
+                &[Listed::MarginEdge],
+            )
         } else {
             let hit = crown_faces_hit(a, n, false);
-            trim(&hit, Listed::Within)
-                .or_else(|| trim(&hit, Listed::Apex))
-                .or_else(|| trim(&hit, Listed::MarginEdge))
+            side.trim(
+                ct,
+                reach,
+                &hit,
+                &[Listed::Within, Listed::Apex, Listed::MarginEdge],
+            )
         };
         let Some((crown, map, t)) = cut else {
             continue;
