@@ -3,10 +3,12 @@
 //! every variant and both jaws, and the two foreign jaws of `../shared/data/foreign/` (an
 //! independent generator), each fused with its true transforms. On every tooth: closed,
 //! manifold, one component, positive volume; every kept IOS crown vertex bitwise at its
-//! transformed input position; no trimmed IOS vertex farther than 0.3 mm (along the surface)
-//! from the margin. Intersecting face pairs other than two kept input crown faces (exact test)
-//! and the trimmed share are bounded by what is measured, which is not yet the aim (none added,
-//! at most 0.5 % trimmed): see the bounds below and the README's fusion table.
+//! transformed input position; no intersecting face pair other than two kept input crown faces
+//! (exact test); no trimmed IOS vertex farther than 0.3 mm (along the surface) from the margin,
+//! except on a tooth whose warnings say the fringe was trimmed farther (the builds within
+//! 0.3 mm left the band crossing the crown), and there at most 0.9 mm. The trimmed share is
+//! bounded by what is measured, which is not yet the aim (at most 0.5 %): see the bounds below
+//! and the README's fusion table.
 
 use std::collections::BTreeMap;
 use toothfuse::arch::Jaw;
@@ -15,38 +17,43 @@ use toothfuse::mesh::LabeledMesh;
 use toothfuse::mesh_check::self_intersections;
 use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
 
-/// Measured bounds of one family of inputs: added crossing pairs per tooth, trimmed share.
+/// Measured bounds of one family of inputs: trimmed share, teeth whose fringe was trimmed
+/// beyond 0.3 mm.
 struct Bounds {
-    added_pairs: usize,
     trimmed_share: f64,
+    widened: usize,
 }
 
-/// Foreign jaws: no added pair on any of the 28 teeth (the contract), at most 0.44 % trimmed.
+/// Foreign jaws: at most 0.45 % trimmed, nothing beyond 0.3 mm.
 const FOREIGN: Bounds = Bounds {
-    added_pairs: 0,
     trimmed_share: 0.005,
+    widened: 0,
 };
 /// Rough phantom exports (much rougher than the foreign jaws: 4x their crossing crown pairs per
-/// crown on dense exports): measured at most 9 added pairs per tooth (2 on the dense jaws),
-/// at most 10.7 % trimmed (a coarse crown of a few hundred vertices; at most 3.2 % on the rough
-/// and dense ones).
+/// crown on dense exports): at most 10.7 % trimmed (a coarse crown of a few hundred vertices;
+/// at most 3.2 % on the rough and dense ones); the fringe trimmed beyond 0.3 mm (at most
+/// 0.52 mm) on 13 teeth of the 20 jaws, at most 2 per jaw.
 const ROUGH: Bounds = Bounds {
-    added_pairs: 9,
     trimmed_share: 0.11,
+    widened: 2,
 };
 
-/// Asserts the contract on every fused tooth; returns (teeth, trimmed vertices in all, crossing
-/// pairs added in all).
+/// The widest trim allowed: three times the default 0.3 mm reach (the last of the wider
+/// reaches the fusion tries on a tooth the builds left crossed).
+const WIDEST_MM: f64 = 0.9;
+
+/// Asserts the contract on every fused tooth; returns the number of teeth and the trimmed
+/// vertices in all.
 fn check(
     b: &Bounds,
     tag: &str,
     ios: &LabeledMesh,
     fused: &FusedJaw,
     tr: &BTreeMap<u8, ToothTransforms>,
-) -> (usize, usize, usize) {
+) -> (usize, usize) {
     let crowns = ios_crowns(ios).expect("crowns");
     let mut trimmed = 0;
-    let mut added_all = 0;
+    let mut widened = 0;
     let mut worst_share = 0.0f64;
     for (fdi, t) in &fused.teeth {
         let q = &t.quality;
@@ -64,20 +71,15 @@ fn check(
             own.len(),
             "{what}: the report's ios_self_intersections against the crown pairs found"
         );
-        if !added.is_empty() {
-            println!("{what}: {} crossing pairs added", added.len());
-        }
-        added_all += added.len();
-        assert_eq!(
-            q.band_crossings_left,
-            added.len(),
-            "{what}: the report's band_crossings_left against the pairs found"
-        );
         assert!(
-            added.len() <= b.added_pairs,
+            added.is_empty(),
             "{what}: {} crossing pairs added by the fusion: {:?}",
             added.len(),
             &added[..added.len().min(6)]
+        );
+        assert_eq!(
+            q.band_crossings_left, 0,
+            "{what}: the report's band_crossings_left"
         );
         let input = &crowns[fdi];
         let to_out = tr[fdi].ios_to_output;
@@ -105,22 +107,39 @@ fn check(
             "{what}: {} of {n} IOS vertices trimmed",
             q.ios_vertices_trimmed
         );
-        assert!(
-            q.ios_trim_reach_mm <= 0.3,
-            "{what}: trimmed {:.3} mm from the margin",
-            q.ios_trim_reach_mm
-        );
+        if q.ios_trim_reach_mm > 0.3 {
+            println!(
+                "{what}: trimmed {:.3} mm from the margin",
+                q.ios_trim_reach_mm
+            );
+            widened += 1;
+            assert!(
+                q.ios_trim_reach_mm <= WIDEST_MM,
+                "{what}: trimmed {:.3} mm from the margin",
+                q.ios_trim_reach_mm
+            );
+            assert!(
+                t.warnings
+                    .iter()
+                    .any(|w| w.contains("the fringe trimmed up to")),
+                "{what}: trimmed {:.3} mm from the margin without a warning saying so: {:?}",
+                q.ios_trim_reach_mm,
+                t.warnings
+            );
+        }
         trimmed += q.ios_vertices_trimmed;
         worst_share = worst_share.max(q.ios_vertices_trimmed as f64 / n as f64);
     }
     println!("{tag}: largest trimmed share {:.2} %", 100.0 * worst_share);
-    (fused.teeth.len(), trimmed, added_all)
+    assert!(
+        widened <= b.widened,
+        "{tag}: {widened} teeth trimmed beyond 0.3 mm"
+    );
+    (fused.teeth.len(), trimmed)
 }
 
-/// Fuses each rough jaw with its true transforms and checks it; asserts that the crossing pairs
-/// the fusion added over all of them are at most `max_added` (the measured count).
-fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)], max_added: usize) {
-    let mut added = 0;
+/// Fuses each rough jaw with its true transforms and checks it.
+fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
     for &(seed, jaw, variant, export) in cases {
         let mut opts = PhantomOptions {
             seed,
@@ -139,15 +158,9 @@ fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)], max_added: usize) {
         // whose cut about that plane's normal does not go around the tooth, is cut again about
         // the CBCT tooth's long axis.
         assert!(fused.failed.is_empty(), "{tag}: failed {:?}", fused.failed);
-        let (n, trimmed, a) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
+        let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
         println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");
-        added += a;
     }
-    println!("{added} crossing pairs added over these jaws");
-    assert!(
-        added <= max_added,
-        "{added} crossing pairs added, measured {max_added}"
-    );
 }
 
 use Jaw::{Lower, Upper};
@@ -155,33 +168,27 @@ use Variant::{Full, HeavyDrift, MetalArtefact, MissingTeeth, PartialArch};
 
 #[test]
 fn rough_full_arches() {
-    rough_jaws(
-        &[
-            (11, Upper, Full, IosExport::Rough),
-            (12, Lower, Full, IosExport::Rough),
-            (13, Upper, HeavyDrift, IosExport::Rough),
-            (14, Lower, MetalArtefact, IosExport::Rough),
-            (15, Upper, MissingTeeth, IosExport::Rough),
-        ],
-        17,
-    );
+    rough_jaws(&[
+        (11, Upper, Full, IosExport::Rough),
+        (12, Lower, Full, IosExport::Rough),
+        (13, Upper, HeavyDrift, IosExport::Rough),
+        (14, Lower, MetalArtefact, IosExport::Rough),
+        (15, Upper, MissingTeeth, IosExport::Rough),
+    ]);
 }
 
 #[test]
 fn coarse_and_partial_arches() {
-    rough_jaws(
-        &[
-            (16, Lower, Full, IosExport::Coarse),
-            (17, Upper, MetalArtefact, IosExport::Coarse),
-            (18, Lower, PartialArch, IosExport::Rough),
-            (19, Upper, PartialArch, IosExport::Coarse),
-            (20, Lower, MissingTeeth, IosExport::Coarse),
-            (21, Upper, HeavyDrift, IosExport::Coarse),
-            (22, Lower, PartialArch, IosExport::Dense2),
-            (23, Upper, PartialArch, IosExport::Rough),
-        ],
-        29,
-    );
+    rough_jaws(&[
+        (16, Lower, Full, IosExport::Coarse),
+        (17, Upper, MetalArtefact, IosExport::Coarse),
+        (18, Lower, PartialArch, IosExport::Rough),
+        (19, Upper, PartialArch, IosExport::Coarse),
+        (20, Lower, MissingTeeth, IosExport::Coarse),
+        (21, Upper, HeavyDrift, IosExport::Coarse),
+        (22, Lower, PartialArch, IosExport::Dense2),
+        (23, Upper, PartialArch, IosExport::Rough),
+    ]);
 }
 
 /// Dense exports (2x, 4x, subdivided): ~2.5 min of CPU, outside the test command's time budget;
@@ -189,18 +196,15 @@ fn coarse_and_partial_arches() {
 #[test]
 #[ignore]
 fn dense_arches() {
-    rough_jaws(
-        &[
-            (24, Upper, PartialArch, IosExport::Dense4),
-            (25, Lower, Full, IosExport::Dense2),
-            (26, Lower, HeavyDrift, IosExport::Rough),
-            (27, Upper, PartialArch, IosExport::Subdivided),
-            (28, Lower, MetalArtefact, IosExport::Dense2),
-            (29, Upper, MissingTeeth, IosExport::Rough),
-            (30, Lower, PartialArch, IosExport::Dense4),
-        ],
-        8,
-    );
+    rough_jaws(&[
+        (24, Upper, PartialArch, IosExport::Dense4),
+        (25, Lower, Full, IosExport::Dense2),
+        (26, Lower, HeavyDrift, IosExport::Rough),
+        (27, Upper, PartialArch, IosExport::Subdivided),
+        (28, Lower, MetalArtefact, IosExport::Dense2),
+        (29, Upper, MissingTeeth, IosExport::Rough),
+        (30, Lower, PartialArch, IosExport::Dense4),
+    ]);
 }
 
 #[test]
@@ -218,7 +222,7 @@ fn foreign_jaws() {
             fuse_jaw(&ios, &cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         assert!(fused.failed.is_empty(), "{case}: failed {:?}", fused.failed);
         assert_eq!(fused.teeth.len(), 14, "{case}");
-        let (n, trimmed, _) = check(&FOREIGN, &case, &ios, &fused, &tr);
+        let (n, trimmed) = check(&FOREIGN, &case, &ios, &fused, &tr);
         println!("{case}: {n} teeth fused, {trimmed} IOS vertices trimmed");
     }
 }

@@ -337,7 +337,27 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
     let (kept, kept_trim, kept_side) = build_attempts(ct, opts)?;
-    let (a, trimmed) = polish(ct, opts, kept, kept_trim, kept_side)?;
+    let (mut a, mut trimmed) = polish(ct, opts, kept, kept_trim, kept_side)?;
+    // Where the builds within the reach leave the band crossing the crown, the builds are made
+    // again with the fringe reaching farther (kept only when fewer crossings are left).
+    for &factor in LAST_RESORT_REACH {
+        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
+            break;
+        }
+        let wide = FuseOptions {
+            fringe_reach_mm: opts.fringe_reach_mm * factor,
+            ..*opts
+        };
+        let (kept, kept_trim, kept_side) = build_attempts(ct, &wide)?;
+        let (b, t) = polish(ct, &wide, kept, kept_trim, kept_side)?;
+        if crossings_left(&b) < crossings_left(&a) {
+            warnings.push(format!(
+                "the band crossed the crown within {:.2} mm of the margin: the fringe trimmed up to {:.2} mm from it ({:.2} mm at most)",
+                opts.fringe_reach_mm, wide.fringe_reach_mm, t.max_reach_mm
+            ));
+            (a, trimmed) = (b, t);
+        }
+    }
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
@@ -412,6 +432,12 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         stitch_ms,
     })
 }
+
+/// Factors of the fringe reach for a tooth the builds within the reach left crossed, tried in
+/// turn while crossings are left. On coarse crowns (edges of 0.3-0.5 mm) one ring of faces
+/// spans more than the 0.3 mm default reach; on rough phantom exports every tooth the first
+/// builds leave crossed is clear with twice the reach (at most 0.52 mm trimmed).
+pub(super) const LAST_RESORT_REACH: &[f64] = &[2.0, 3.0];
 
 /// Rounds of trimming the kept build's pierced margin faces after the builds, at most.
 const POLISH_ROUNDS: usize = 3;
@@ -574,4 +600,10 @@ fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assem
         band: band_start..band_end,
         untangle,
     })
+}
+
+/// The largest of [`LAST_RESORT_REACH`]: how far from the margin the crown's distances are
+/// needed.
+pub(super) fn widest_reach_factor() -> f64 {
+    LAST_RESORT_REACH.iter().copied().fold(1.0, f64::max)
 }

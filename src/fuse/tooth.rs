@@ -287,7 +287,11 @@ fn fold_trim(
     if opts.fringe_reach_mm > 0.0 {
         let loops = boundary_loops(&crown);
         if loops.len() == 1 {
-            let d = super::fringe::edge_distance(&crown, &loops[0], opts.fringe_reach_mm);
+            let d = super::fringe::edge_distance(
+                &crown,
+                &loops[0],
+                opts.fringe_reach_mm * super::assembly::widest_reach_factor(),
+            );
             dist_in = vec![f64::INFINITY; input_vertices];
             for (v, &s) in rep_src.iter().enumerate() {
                 if s != u32::MAX {
