@@ -42,17 +42,18 @@ const ROUGH: Bounds = Bounds {
 /// reaches the fusion tries on a tooth the builds left crossed).
 const WIDEST_MM: f64 = 0.9;
 
-/// Asserts the contract on every fused tooth; returns the number of teeth and the trimmed
-/// vertices in all.
+/// Asserts the contract on every fused tooth; returns the number of teeth, the trimmed
+/// vertices in all and the teeth whose slits at the margin were closed.
 fn check(
     b: &Bounds,
     tag: &str,
     ios: &LabeledMesh,
     fused: &FusedJaw,
     tr: &BTreeMap<u8, ToothTransforms>,
-) -> (usize, usize) {
+) -> (usize, usize, usize) {
     let crowns = ios_crowns(ios).expect("crowns");
     let mut trimmed = 0;
+    let mut inlets = 0;
     let mut widened = 0;
     let mut worst_share = 0.0f64;
     for (fdi, t) in &fused.teeth {
@@ -127,6 +128,10 @@ fn check(
                 t.warnings
             );
         }
+        if t.warnings.iter().any(|w| w.contains("narrow inlets")) {
+            println!("{what}: slits at the margin closed: {:?}", t.warnings);
+            inlets += 1;
+        }
         trimmed += q.ios_vertices_trimmed;
         worst_share = worst_share.max(q.ios_vertices_trimmed as f64 / n as f64);
     }
@@ -135,11 +140,13 @@ fn check(
         widened <= b.widened,
         "{tag}: {widened} teeth trimmed beyond 0.3 mm"
     );
-    (fused.teeth.len(), trimmed)
+    (fused.teeth.len(), trimmed, inlets)
 }
 
-/// Fuses each rough jaw with its true transforms and checks it.
-fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
+/// Fuses each rough jaw with its true transforms and checks it; returns the teeth whose slits
+/// at the margin were closed.
+fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) -> usize {
+    let mut inlets = 0;
     for &(seed, jaw, variant, export) in cases {
         let mut opts = PhantomOptions {
             seed,
@@ -158,9 +165,11 @@ fn rough_jaws(cases: &[(u64, Jaw, Variant, IosExport)]) {
         // whose cut about that plane's normal does not go around the tooth, is cut again about
         // the CBCT tooth's long axis.
         assert!(fused.failed.is_empty(), "{tag}: failed {:?}", fused.failed);
-        let (n, trimmed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
+        let (n, trimmed, closed) = check(&ROUGH, &tag, &p.ios, &fused, &tr);
         println!("{tag}: {n} teeth fused, {trimmed} IOS vertices trimmed");
+        inlets += closed;
     }
+    inlets
 }
 
 use Jaw::{Lower, Upper};
@@ -168,7 +177,7 @@ use Variant::{Full, HeavyDrift, MetalArtefact, MissingTeeth, PartialArch};
 
 #[test]
 fn rough_full_arches() {
-    rough_jaws(&[
+    let _ = rough_jaws(&[
         (11, Upper, Full, IosExport::Rough),
         (12, Lower, Full, IosExport::Rough),
         (13, Upper, HeavyDrift, IosExport::Rough),
@@ -179,7 +188,7 @@ fn rough_full_arches() {
 
 #[test]
 fn coarse_and_partial_arches() {
-    rough_jaws(&[
+    let inlets = rough_jaws(&[
         (16, Lower, Full, IosExport::Coarse),
         (17, Upper, MetalArtefact, IosExport::Coarse),
         (18, Lower, PartialArch, IosExport::Rough),
@@ -189,6 +198,9 @@ fn coarse_and_partial_arches() {
         (22, Lower, PartialArch, IosExport::Dense2),
         (23, Upper, PartialArch, IosExport::Rough),
     ]);
+    // Coarse crowns with slits at their margins (measured: seed 16 tooth 46, seed 21 tooth 15)
+    // are fused with the slits closed.
+    assert!(inlets >= 1, "no slit at a margin closed");
 }
 
 /// Dense exports (2x, 4x, subdivided): ~2.5 min of CPU, outside the test command's time budget;
@@ -196,7 +208,7 @@ fn coarse_and_partial_arches() {
 #[test]
 #[ignore]
 fn dense_arches() {
-    rough_jaws(&[
+    let _ = rough_jaws(&[
         (24, Upper, PartialArch, IosExport::Dense4),
         (25, Lower, Full, IosExport::Dense2),
         (26, Lower, HeavyDrift, IosExport::Rough),
@@ -222,7 +234,7 @@ fn foreign_jaws() {
             fuse_jaw(&ios, &cbct, &tr, &FuseOptions::preset(Preset::Default)).expect("fuse");
         assert!(fused.failed.is_empty(), "{case}: failed {:?}", fused.failed);
         assert_eq!(fused.teeth.len(), 14, "{case}");
-        let (n, trimmed) = check(&FOREIGN, &case, &ios, &fused, &tr);
+        let (n, trimmed, _) = check(&FOREIGN, &case, &ios, &fused, &tr);
         println!("{case}: {n} teeth fused, {trimmed} IOS vertices trimmed");
     }
 }

@@ -168,14 +168,9 @@ fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
 /// jaws' teeth take at most four).
 const MAX_ATTEMPTS: usize = 10;
 
-/// The band builds of one tooth: built, and where crossings are left the crown's fringe
-/// trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. Returns the build with the
-/// fewest crossings left (the earliest, least trimmed, on a tie), its trim and its crown side.
-fn build_attempts(
-    ct: &CutTooth,
-    opts: &FuseOptions,
-) -> Result<(Assembled, super::fringe::FringeTrim, CrownSide)> {
-    let mut side = CrownSide {
+/// The crown side of the cut tooth as it is.
+fn cut_side(ct: &CutTooth) -> CrownSide {
+    CrownSide {
         crown: ct.crown.clone(),
         margin: ct.margin.clone(),
         dirs: ct.crown_dirs.clone(),
@@ -186,7 +181,28 @@ fn build_attempts(
             .filter(|c| matches!(c.0, BandVertex::Upper(_)))
             .collect(),
         ios_vertex: ct.ios_vertex.clone(),
-    };
+    }
+}
+
+/// The builds of one tooth from the crown side `side` ([`build_attempts`], then [`polish`]):
+/// the build kept and the tooth's trim.
+fn builds(
+    ct: &CutTooth,
+    side: CrownSide,
+    opts: &FuseOptions,
+) -> Result<(Assembled, super::fringe::FringeTrim)> {
+    let (kept, kept_trim, kept_side) = build_attempts(ct, side, opts)?;
+    polish(ct, opts, kept, kept_trim, kept_side)
+}
+
+/// The band builds of one tooth from the crown side `side`: built, and where crossings are left the crown's fringe
+/// trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. Returns the build with the
+/// fewest crossings left (the earliest, least trimmed, on a tie), its trim and its crown side.
+fn build_attempts(
+    ct: &CutTooth,
+    mut side: CrownSide,
+    opts: &FuseOptions,
+) -> Result<(Assembled, super::fringe::FringeTrim, CrownSide)> {
     let mut trimmed = ct.trimmed;
     // Where the band cannot clear a crown face within the fringe, that face goes (with the faces
     // between it and the margin) and the band is built again on the new margin. Of the attempts,
@@ -336,8 +352,27 @@ fn polish_step(
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
-    let (kept, kept_trim, kept_side) = build_attempts(ct, opts)?;
-    let (mut a, mut trimmed) = polish(ct, opts, kept, kept_trim, kept_side)?;
+    let (mut a, mut trimmed) = builds(ct, cut_side(ct), opts)?;
+    let mut start = cut_side(ct);
+    let mut inlets_closed = 0;
+    // Where the band crosses the crown, a slit in the crown at the margin (the margin running
+    // up into the crown and back beside itself) may be what it cannot clear: the slits are
+    // closed ([`super::inlet`]) and the builds made again, kept only with fewer crossings.
+    if crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0 {
+        let mut crown = ct.crown.clone();
+        let r = super::inlet::close_inlets(&mut crown);
+        if r.closed > 0 {
+            let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
+            let (b, t) = builds(ct, side.clone(), opts)?;
+            if crossings_left(&b) < crossings_left(&a) {
+                warnings.push(format!(
+                    "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
+                    r.closed, r.faces, r.length_mm
+                ));
+                (a, trimmed, start, inlets_closed) = (b, t, side, r.closed);
+            }
+        }
+    }
     // Where the builds within the reach leave the band crossing the crown, the builds are made
     // again with the fringe reaching farther (kept only when fewer crossings are left).
     for &factor in LAST_RESORT_REACH {
@@ -348,8 +383,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             fringe_reach_mm: opts.fringe_reach_mm * factor,
             ..*opts
         };
-        let (kept, kept_trim, kept_side) = build_attempts(ct, &wide)?;
-        let (b, t) = polish(ct, &wide, kept, kept_trim, kept_side)?;
+        let (b, t) = builds(ct, start.clone(), &wide)?;
         if crossings_left(&b) < crossings_left(&a) {
             warnings.push(format!(
                 "the band crossed the crown within {:.2} mm of the margin: the fringe trimmed up to {:.2} mm from it ({:.2} mm at most)",
@@ -391,7 +425,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     q.crown_vertices = ct
         .kept_ios
         .saturating_sub(trimmed.vertices - ct.trimmed.vertices);
-    q.holes_filled = ct.holes_filled;
+    q.holes_filled = ct.holes_filled + inlets_closed;
     q.ios_vertices_trimmed = trimmed.vertices;
     q.ios_trim_reach_mm = trimmed.max_reach_mm;
     q.ios_vertices_dropped = ct.dropped;

@@ -6,6 +6,7 @@ mod assembly;
 mod band_crossings;
 mod band_opt;
 pub mod fringe;
+pub mod inlet;
 mod jaw;
 mod near_faces;
 pub mod quality;
