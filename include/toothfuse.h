@@ -837,8 +837,9 @@ toothfuse_status toothfuse_session_fused_crossings(const struct toothfuse_sessio
  * Writes how much of fused tooth `fdi`'s IOS crown was trimmed from its margin fringe: the
  * number of IOS crown vertices dropped (folded over other crown faces, or crossed by the band)
  * to `*vertices_out` and the largest geodesic distance (mm) of a dropped vertex from the original
- * margin to `*reach_mm_out` (0 when none was dropped; never more than the fringe reach, 0.3 mm by
- * default). Every other IOS crown vertex is in the fused mesh bitwise. WRONG_STATE before a fuse;
+ * margin to `*reach_mm_out` (0 when none was dropped; at most the fringe reach, 0.3 mm by
+ * default, or 3x that on a tooth the band could not clear within it, whose warning says so).
+ * Every other IOS crown vertex is in the fused mesh bitwise. WRONG_STATE before a fuse;
  * MISSING_DATA (with the reason) for a tooth that was not fused.
  *
  * # Safety

@@ -11,12 +11,12 @@ use crate::mesh::{EdgeTopology, TriMesh, boundary_loops};
 
 /// Widest inlet mouth (mm) closed: a slit, far narrower than an interproximal notch the band
 /// can follow (1.1-1.8 mm across).
-pub const MOUTH_MM: f64 = 0.6;
+const MOUTH_MM: f64 = 0.6;
 /// Shortest inlet (mm along the margin, mouth to mouth) closed: shorter dents are the margin's
 /// own raggedness, which the fringe trim handles.
-pub const MIN_LENGTH_MM: f64 = 1.5;
+const MIN_LENGTH_MM: f64 = 1.5;
 /// An inlet runs along the margin at least this many times its mouth's width.
-pub const SLENDERNESS: f64 = 4.0;
+const SLENDERNESS: f64 = 4.0;
 /// Inlets closed per crown at most.
 const MAX_INLETS: usize = 8;
 

@@ -6,7 +6,7 @@ mod assembly;
 mod band_crossings;
 mod band_opt;
 pub mod fringe;
-pub mod inlet;
+mod inlet;
 mod jaw;
 mod near_faces;
 pub mod quality;
@@ -71,7 +71,9 @@ pub struct FuseOptions {
     /// Stitching.
     pub stitch: StitchOptions,
     /// Geodesic reach (mm) from the IOS margin within which crown faces that fold over other
-    /// crown faces, or that the band cannot clear, are trimmed ([`fringe`]); 0 trims nothing.
+    /// crown faces, or that the band cannot clear, are trimmed ([`fringe`]); a tooth the band
+    /// still crosses is built again with the narrow slits of its margin closed and
+    /// then with 2x and 3x this reach (warned). 0 trims nothing and closes no slit.
     pub fringe_reach_mm: f64,
     /// Count intersecting face pairs in the quality report (exact test; costs time).
     pub check_self_intersections: bool,
