@@ -363,8 +363,10 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         let r = super::inlet::close_inlets(&mut crown);
         if r.closed > 0 {
             let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
-            let (b, t) = builds(ct, side.clone(), opts)?;
-            if crossings_left(&b) < crossings_left(&a) {
+            // A remedy that fails to build is skipped: the tooth keeps the build it has.
+            if let Ok((b, t)) = builds(ct, side.clone(), opts)
+                && crossings_left(&b) < crossings_left(&a)
+            {
                 warnings.push(format!(
                     "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
                     r.closed, r.faces, r.length_mm
@@ -383,8 +385,9 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
             fringe_reach_mm: opts.fringe_reach_mm * factor,
             ..*opts
         };
-        let (b, t) = builds(ct, start.clone(), &wide)?;
-        if crossings_left(&b) < crossings_left(&a) {
+        if let Ok((b, t)) = builds(ct, start.clone(), &wide)
+            && crossings_left(&b) < crossings_left(&a)
+        {
             warnings.push(format!(
                 "the band crossed the crown within {:.2} mm of the margin: the fringe trimmed up to {:.2} mm from it ({:.2} mm at most)",
                 opts.fringe_reach_mm, wide.fringe_reach_mm, t.max_reach_mm

@@ -88,7 +88,7 @@ fn inlets(crown: &TriMesh, lp: &[u32]) -> Vec<(usize, usize, f64)> {
 
 /// The strip closing the inlet of loop `lp` from position `i` to `j`: the two sides zipped from
 /// the mouth inwards, each step advancing the side whose next diagonal is shorter. `None` when
-/// the inlet repeats a vertex, a diagonal is already an edge of the crown, or a strip face
+/// the loop passes one of the inlet's vertices twice, a diagonal is already an edge of the crown, or a strip face
 /// crosses the crown (or another strip face).
 fn zip(
     crown: &TriMesh,
@@ -99,10 +99,15 @@ fn zip(
 ) -> Option<Vec<[u32; 3]>> {
     let n = lp.len();
     let side: Vec<u32> = (0..=(j + n - i) % n).map(|k| lp[(i + k) % n]).collect();
-    let mut seen = side.clone();
+    // Each of the inlet's vertices on the loop once: a vertex the loop passes twice (a pinch)
+    // would keep a boundary fan on the other pass, and closing the strip around it would leave
+    // it non-manifold.
+    let mut seen = lp.to_vec();
     seen.sort_unstable();
-    seen.dedup();
-    if seen.len() != side.len() {
+    if side
+        .iter()
+        .any(|v| seen.partition_point(|w| w < v) + 1 != seen.partition_point(|w| w <= v))
+    {
         return None;
     }
     let at = |v: u32| crown.positions[v as usize];
