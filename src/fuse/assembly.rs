@@ -24,7 +24,7 @@ pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
 /// The crown side of the band: the (possibly trimmed) crown, its margin, the directions across
 /// the margin, the crown's chords and its vertices' IOS input indices.
 #[derive(Clone)]
-struct CrownSide {
+pub(super) struct CrownSide {
     crown: TriMesh,
     margin: Vec<u32>,
     dirs: Vec<DVec3>,
@@ -59,7 +59,7 @@ impl CrownSide {
 }
 
 /// Crown + band + root of one attempt, with what the untangling left.
-struct Assembled {
+pub(super) struct Assembled {
     mesh: TriMesh,
     source: Vec<u8>,
     ios_vertex: Vec<u32>,
@@ -169,7 +169,7 @@ fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
 const MAX_ATTEMPTS: usize = 10;
 
 /// The crown side of the cut tooth as it is.
-fn cut_side(ct: &CutTooth) -> CrownSide {
+pub(super) fn cut_side(ct: &CutTooth) -> CrownSide {
     CrownSide {
         crown: ct.crown.clone(),
         margin: ct.margin.clone(),
@@ -186,7 +186,7 @@ fn cut_side(ct: &CutTooth) -> CrownSide {
 
 /// The builds of one tooth from the crown side `side` ([`build_attempts`], then [`polish`]):
 /// the build kept and the tooth's trim.
-fn builds(
+pub(super) fn builds(
     ct: &CutTooth,
     side: CrownSide,
     opts: &FuseOptions,
@@ -352,49 +352,8 @@ fn polish_step(
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
-    let (mut a, mut trimmed) = builds(ct, cut_side(ct), opts)?;
-    let mut start = cut_side(ct);
-    let mut inlets_closed = 0;
-    // Where the band crosses the crown, a slit in the crown at the margin (the margin running
-    // up into the crown and back beside itself) may be what it cannot clear: the slits are
-    // closed ([`super::inlet`]) and the builds made again, kept only with fewer crossings.
-    if crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0 {
-        let mut crown = ct.crown.clone();
-        let r = super::inlet::close_inlets(&mut crown);
-        if r.closed > 0 {
-            let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
-            // A remedy that fails to build is skipped: the tooth keeps the build it has.
-            if let Ok((b, t)) = builds(ct, side.clone(), opts)
-                && crossings_left(&b) < crossings_left(&a)
-            {
-                warnings.push(format!(
-                    "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
-                    r.closed, r.faces, r.length_mm
-                ));
-                (a, trimmed, start, inlets_closed) = (b, t, side, r.closed);
-            }
-        }
-    }
-    // Where the builds within the reach leave the band crossing the crown, the builds are made
-    // again with the fringe reaching farther (kept only when fewer crossings are left).
-    for &factor in LAST_RESORT_REACH {
-        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
-            break;
-        }
-        let wide = FuseOptions {
-            fringe_reach_mm: opts.fringe_reach_mm * factor,
-            ..*opts
-        };
-        if let Ok((b, t)) = builds(ct, start.clone(), &wide)
-            && crossings_left(&b) < crossings_left(&a)
-        {
-            warnings.push(format!(
-                "the band crossed the crown within {:.2} mm of the margin: the fringe trimmed up to {:.2} mm from it ({:.2} mm at most)",
-                opts.fringe_reach_mm, wide.fringe_reach_mm, t.max_reach_mm
-            ));
-            (a, trimmed) = (b, t);
-        }
-    }
+    let (a, trimmed) = builds(ct, cut_side(ct), opts)?;
+    let (a, trimmed, inlets_closed) = super::remedy::remedies(ct, opts, a, trimmed, &mut warnings);
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
@@ -470,12 +429,6 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     })
 }
 
-/// Factors of the fringe reach for a tooth the builds within the reach left crossed, tried in
-/// turn while crossings are left. On coarse crowns (edges of 0.3-0.5 mm) one ring of faces
-/// spans more than the 0.3 mm default reach; on rough phantom exports every tooth the first
-/// builds leave crossed is clear with twice the reach (at most 0.52 mm trimmed).
-pub(super) const LAST_RESORT_REACH: &[f64] = &[2.0, 3.0];
-
 /// Rounds of trimming the kept build's pierced margin faces after the builds, at most.
 const POLISH_ROUNDS: usize = 3;
 
@@ -488,7 +441,7 @@ fn add_trim(total: &mut super::fringe::FringeTrim, t: &super::fringe::FringeTrim
 }
 
 /// The crown side of a trimmed crown (`map`: its vertices' IOS input indices).
-fn trimmed_side(ct: &CutTooth, crown: TriMesh, map: Vec<u32>) -> CrownSide {
+pub(super) fn trimmed_side(ct: &CutTooth, crown: TriMesh, map: Vec<u32>) -> CrownSide {
     let margin = boundary_loops(&crown)
         .into_iter()
         .next()
@@ -528,7 +481,7 @@ fn reshaped(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions, mut best: Assem
 }
 
 /// Intersecting face pairs with a band face the untangling left (0 without untangling).
-fn crossings_left(a: &Assembled) -> usize {
+pub(super) fn crossings_left(a: &Assembled) -> usize {
     a.untangle.as_ref().map_or(0, |u| u.crossings_after)
 }
 
@@ -637,10 +590,4 @@ fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assem
         band: band_start..band_end,
         untangle,
     })
-}
-
-/// The largest of [`LAST_RESORT_REACH`]: how far from the margin the crown's distances are
-/// needed.
-pub(super) fn widest_reach_factor() -> f64 {
-    LAST_RESORT_REACH.iter().copied().fold(1.0, f64::max)
 }

@@ -10,6 +10,7 @@ mod inlet;
 mod jaw;
 mod near_faces;
 pub mod quality;
+mod remedy;
 mod tooth;
 pub mod untangle;
 

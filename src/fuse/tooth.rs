@@ -290,7 +290,7 @@ fn fold_trim(
             let d = super::fringe::edge_distance(
                 &crown,
                 &loops[0],
-                opts.fringe_reach_mm * super::assembly::widest_reach_factor(),
+                opts.fringe_reach_mm * super::remedy::widest_reach_factor(),
             );
             dist_in = vec![f64::INFINITY; input_vertices];
             for (v, &s) in rep_src.iter().enumerate() {
