@@ -122,7 +122,7 @@ fn check(
             assert!(
                 t.warnings
                     .iter()
-                    .any(|w| w.contains("the fringe trimmed up to")),
+                    .any(|w| w.contains("with the fringe reaching")),
                 "{what}: trimmed {:.3} mm from the margin without a warning saying so: {:?}",
                 q.ios_trim_reach_mm,
                 t.warnings

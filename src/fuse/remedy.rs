@@ -59,7 +59,7 @@ pub(super) fn remedies(
             && crossings_left(&b) < crossings_left(&a)
         {
             warnings.push(format!(
-                "the band crossed the crown within {:.2} mm of the margin: the fringe trimmed up to {:.2} mm from it ({:.2} mm at most)",
+                "the band crossed the crown within {:.2} mm of the margin: built again with the fringe reaching {:.2} mm, IOS vertices trimmed up to {:.2} mm from it",
                 opts.fringe_reach_mm, wide.fringe_reach_mm, t.max_reach_mm
             ));
             (a, trimmed) = (b, t);
