@@ -315,3 +315,57 @@ fn error_paths_name_the_file() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A coarse (decimated-like) export with slits at its crowns' margins, fused from the command
+/// line with its registration: the slits are closed where the band could not clear them (the
+/// upper second premolar 15: three slits), and `report.json` carries it per tooth (a warning,
+/// `holes_filled`) beside `band_crossings_left`, 0 on every tooth of this jaw.
+#[test]
+fn coarse_export_slits_closed_and_reported() {
+    let d = tmp("coarse_slits");
+    let demo = d.join("demo");
+    ok(&[
+        "demo",
+        "--seed",
+        "21",
+        "--jaw",
+        "upper",
+        "--variant",
+        "drift",
+        "--ios-export",
+        "coarse",
+        "--out",
+        s(&demo),
+    ]);
+    let out = d.join("fused");
+    ok(&[
+        "fuse",
+        "--ios",
+        s(&demo.join("ios.ply")),
+        "--cbct",
+        s(&demo.join("cbct.ply")),
+        "--out",
+        s(&out),
+    ]);
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let teeth = r["teeth"].as_array().unwrap();
+    assert_eq!(teeth.len(), 14, "{r}");
+    let mut closed = Vec::new();
+    for t in teeth {
+        let fdi = t["fdi"].as_u64().unwrap();
+        let q = &t["quality"];
+        assert_eq!(t["watertight"], true, "tooth {fdi}");
+        assert_eq!(q["band_crossings_left"], 0, "tooth {fdi}: {t}");
+        let warned = t["warnings"].as_array().unwrap().iter().any(|w| {
+            w.as_str()
+                .unwrap()
+                .contains("narrow inlets of the IOS margin closed")
+        });
+        if warned {
+            closed.push(fdi);
+            assert!(q["holes_filled"].as_u64().unwrap() >= 1, "tooth {fdi}: {q}");
+        }
+    }
+    assert_eq!(closed, [15], "teeth whose slits were closed");
+}
