@@ -2,11 +2,11 @@
 //! Example_01, cut out by a segmentation tool's per-face labels: broken patches with bow-ties,
 //! islands, slivers and ragged margins), each fused onto a phantom CBCT tooth of the same FDI
 //! number placed under it (no matched real CBCT exists: the phantom tooth is moved and scaled so
-//! that its crown's margin frame meets the real crown's). The root is synthetic, the crown and
-//! its margin are not: every fused tooth must be closed, manifold, one component, outward, with
+//! that its crown's margin frame meets the real crown's, then moved by a rigid fit of its crown
+//! to the real one). The root is synthetic, the crown and its margin are not. Every fused tooth must be closed, manifold, one component, outward, with
 //! no intersecting face pair other than two kept input crown faces (exact test), every kept IOS
 //! vertex bitwise where it was, and every input crown vertex kept, trimmed or dropped. Measured
-//! short of that: one crown keeps band faces crossing each other (bounded below, reported).
+//! short of that: one crown is refused by the cut, with an error naming it (asserted below).
 //! Skips when the real data folder is absent.
 
 use glam::{DMat3, DVec3};
@@ -51,6 +51,30 @@ fn basis(f: &ToothFrame, arch_centre: DVec3) -> DMat3 {
     let to = arch_centre - f.center;
     let l = (to - f.axis * to.dot(f.axis)).normalize();
     DMat3::from_cols(f.axis, l, f.axis.cross(l))
+}
+
+/// Rigid point-to-point ICP of `src` onto `dst` (nearest points by a full scan, every sixth
+/// source point; 20 iterations): the transform taking `src` onto `dst`.
+fn icp(src: &[DVec3], dst: &[DVec3]) -> Rigid {
+    let mut t = Rigid::IDENTITY;
+    for _ in 0..20 {
+        let moved: Vec<DVec3> = src.iter().step_by(6).map(|&p| t.apply(p)).collect();
+        let near: Vec<DVec3> = moved
+            .iter()
+            .map(|&p| {
+                *dst.iter()
+                    .min_by(|a, b| {
+                        (**a - p)
+                            .length_squared()
+                            .total_cmp(&(**b - p).length_squared())
+                    })
+                    .expect("points")
+            })
+            .collect();
+        let step = toothfuse::register::centroid::kabsch(&moved, &near, None).expect("kabsch");
+        t = step.compose(&t);
+    }
+    t
 }
 
 #[test]
@@ -100,11 +124,20 @@ fn real_scan_crowns_fuse_onto_phantom_roots_within_the_contract() {
         // margin frame meets the real crown's.
         let (br, bp) = (basis(fr, real_c), basis(fp, ph_c));
         let (rot, s) = (br * bp.transpose(), rr / rp);
+        let place = |v: DVec3| fr.center + rot * ((v - fp.center) * s);
+        // Then the phantom crown fitted to the real one (rigid ICP, nearest points), so that
+        // the CBCT tooth sits where its crown matches best.
+        let ph_crown: Vec<DVec3> = phantom_crowns[&fdi]
+            .positions
+            .iter()
+            .map(|&v| place(tr[&fdi].ios_to_output.apply(v)))
+            .collect();
+        let fit = icp(&ph_crown, &crown.positions);
         let to_out = tr[&fdi].cbct_to_output;
         let placed = TriMesh::new(
             cbct.positions
                 .iter()
-                .map(|&v| fr.center + rot * ((to_out.apply(v) - fp.center) * s))
+                .map(|&v| fit.apply(place(to_out.apply(v))))
                 .collect(),
             cbct.triangles.clone(),
         );
@@ -183,9 +216,15 @@ fn real_scan_crowns_fuse_onto_phantom_roots_within_the_contract() {
             q.ios_vertices_trimmed, used, q.ios_trim_reach_mm, q.ios_vertices_dropped, t.warnings
         );
     }
-    println!("{fused} of 14 real crowns fused; not fused: {failed:?}");
+    println!("{fused} of 14 real crowns fused; not fused: {failed:?}; crossed: {crossed:?}");
+    // Measured, not the contract's aim: the central incisor 11, whose labelled margin is a
+    // saddle dropping ~6 mm below its interproximal horns, is refused by the cut (its cut loop
+    // does not wind around the CBCT tooth, about the margin's plane nor about the tooth's
+    // long axis), with an error naming the tooth. Every other real crown is fused with no
+    // crossing pair added.
+    assert_eq!(failed, [11], "real crowns not fused");
     assert!(
-        fused >= 12,
-        "{fused} of 14 real crowns fused; not fused: {failed:?}"
+        crossed.is_empty(),
+        "crossing pairs added on real crowns: {crossed:?}"
     );
 }
