@@ -5,8 +5,7 @@
 //! that its crown's margin frame meets the real crown's, then moved by a rigid fit of its crown
 //! to the real one). The root is synthetic, the crown and its margin are not. Every fused tooth must be closed, manifold, one component, outward, with
 //! no intersecting face pair other than two kept input crown faces (exact test), every kept IOS
-//! vertex bitwise where it was, and every input crown vertex kept, trimmed or dropped. Measured
-//! short of that: one crown is refused by the cut, with an error naming it (asserted below).
+//! vertex bitwise where it was, and every input crown vertex kept, trimmed or dropped.
 //! Skips when the real data folder is absent.
 
 use glam::{DMat3, DVec3};
@@ -162,6 +161,15 @@ fn real_scan_crowns_fuse_onto_phantom_roots_within_the_contract() {
             }
         };
         fused += 1;
+        if fdi == 11 {
+            assert!(
+                t.warnings
+                    .iter()
+                    .any(|w| w.contains("cut about the long axis")),
+                "real crown 11: {:?}",
+                t.warnings
+            );
+        }
         let q = &t.quality;
         let what = format!("real crown {fdi}");
         assert!(q.closed && q.manifold && q.components == 1, "{what}: {q:?}");
@@ -217,12 +225,10 @@ fn real_scan_crowns_fuse_onto_phantom_roots_within_the_contract() {
         );
     }
     println!("{fused} of 14 real crowns fused; not fused: {failed:?}; crossed: {crossed:?}");
-    // Measured, not the contract's aim: the central incisor 11, whose labelled margin is a
-    // saddle dropping ~6 mm below its interproximal horns, is refused by the cut (its cut loop
-    // does not wind around the CBCT tooth, about the margin's plane nor about the tooth's
-    // long axis), with an error naming the tooth. Every other real crown is fused with no
-    // crossing pair added.
-    assert_eq!(failed, [11], "real crowns not fused");
+    // The central incisor 11, whose labelled margin is a saddle dropping ~6 mm below its
+    // interproximal horns, tilts the margin's plane 45° from the CBCT tooth's long axis and is
+    // cut about that axis (it was refused while that retry needed a tilt over 45°).
+    assert!(failed.is_empty(), "real crowns not fused: {failed:?}");
     assert!(
         crossed.is_empty(),
         "crossing pairs added on real crowns: {crossed:?}"

@@ -320,9 +320,8 @@ fn fold_trim(
 }
 
 /// Crown removal along the margin `margin_pts` about `frame`'s axis; where that cut does not go
-/// once around the tooth and the margin's plane is tilted more than [`MAX_AXIS_TILT_DEG`] off
-/// the CBCT tooth's long axis, the cut is made again about that axis. Returns the frame used
-/// and the cut.
+/// once around the tooth, the cut is made again about the CBCT tooth's long axis (kept when it
+/// does). Returns the frame used and the cut.
 fn cut_root(
     root_in: &TriMesh,
     margin_pts: &[DVec3],
@@ -333,9 +332,9 @@ fn cut_root(
     let mut rc = cut::cut_crown(root_in, margin_pts, &frame, &opts.cut)?;
     // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
     // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then the cut
-    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis
-    // when the two are more than `MAX_AXIS_TILT_DEG` apart (a tooth that cuts well keeps its
-    // margin frame: a molar's long axis can lie across it).
+    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis,
+    // whatever the tilt (a tooth that cuts well keeps its margin frame: a molar's long axis can
+    // lie across it; and a tooth whose cut fails has nothing to lose).
     if !winds_once(&frame, &rc)
         && let Some((_, long)) = crate::geom::principal_axis(&root_in.positions)
     {
@@ -346,8 +345,7 @@ fn cut_root(
         };
         let tilt = frame.axis.angle_between(long).to_degrees();
         let long_frame = ToothFrame::new(frame.center, long);
-        if tilt > MAX_AXIS_TILT_DEG
-            && let Ok(r) = cut::cut_crown(root_in, margin_pts, &long_frame, &opts.cut)
+        if let Ok(r) = cut::cut_crown(root_in, margin_pts, &long_frame, &opts.cut)
             && winds_once(&long_frame, &r)
         {
             warnings.push(format!(
@@ -359,10 +357,6 @@ fn cut_root(
     }
     Ok((frame, rc))
 }
-
-/// Largest angle (degrees) between the margin plane's normal and the CBCT tooth's long axis
-/// for the normal to be the tooth axis.
-const MAX_AXIS_TILT_DEG: f64 = 45.0;
 
 /// Whether the root's cut loop goes once around the tooth axis (either way), as the band needs.
 fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
