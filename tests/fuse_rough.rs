@@ -32,7 +32,7 @@ const FOREIGN: Bounds = Bounds {
 /// Rough phantom exports (much rougher than the foreign jaws: 4x their crossing crown pairs per
 /// crown on dense exports): at most 10.7 % trimmed (a coarse crown of a few hundred vertices;
 /// at most 3.2 % on the rough and dense ones); the fringe trimmed beyond 0.3 mm (at most
-/// 0.52 mm) on 13 teeth of the 20 jaws, at most 2 per jaw.
+/// 0.52 mm) on 12 teeth of the 20 jaws, at most 2 per jaw.
 const ROUGH: Bounds = Bounds {
     trimmed_share: 0.11,
     widened: 2,

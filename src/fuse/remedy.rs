@@ -10,7 +10,7 @@ use super::tooth::CutTooth;
 /// Factors of the fringe reach for a tooth the builds within the reach left crossed, tried in
 /// turn while crossings are left. On coarse crowns (edges of 0.3-0.5 mm) one ring of faces
 /// spans more than the 0.3 mm default reach; on rough phantom exports every tooth the first
-/// builds leave crossed is clear with twice the reach (at most 0.52 mm trimmed).
+/// builds leave crossed is clear after these builds, trimmed at most 0.52 mm from the margin.
 pub(super) const LAST_RESORT_REACH: &[f64] = &[2.0, 3.0];
 
 /// The remedies for build `a` (trim `trimmed`) of `ct`, tried in turn while crossings are left
