@@ -23,32 +23,33 @@ pub(super) fn remedies(
     mut trimmed: FringeTrim,
     warnings: &mut Vec<String>,
 ) -> (Assembled, FringeTrim, usize) {
+    if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
+        return (a, trimmed, 0);
+    }
     let mut start = super::assembly::cut_side(ct);
     let mut inlets_closed = 0;
     // Where the band crosses the crown, a slit in the crown at the margin (the margin running
     // up into the crown and back beside itself) may be what it cannot clear: the slits are
     // closed ([`super::inlet`]) and the builds made again, kept only with fewer crossings.
-    if crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0 {
-        let mut crown = ct.crown.clone();
-        let r = super::inlet::close_inlets(&mut crown);
-        if r.closed > 0 {
-            let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
-            // A remedy that fails to build is skipped: the tooth keeps the build it has.
-            if let Ok((b, t)) = builds(ct, side.clone(), opts)
-                && crossings_left(&b) < crossings_left(&a)
-            {
-                warnings.push(format!(
-                    "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
-                    r.closed, r.faces, r.length_mm
-                ));
-                (a, trimmed, start, inlets_closed) = (b, t, side, r.closed);
-            }
+    let mut crown = ct.crown.clone();
+    let r = super::inlet::close_inlets(&mut crown);
+    if r.closed > 0 {
+        let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
+        // A remedy that fails to build is skipped: the tooth keeps the build it has.
+        if let Ok((b, t)) = builds(ct, side.clone(), opts)
+            && crossings_left(&b) < crossings_left(&a)
+        {
+            warnings.push(format!(
+                "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
+                r.closed, r.faces, r.length_mm
+            ));
+            (a, trimmed, start, inlets_closed) = (b, t, side, r.closed);
         }
     }
     // Where the builds within the reach leave the band crossing the crown, the builds are made
     // again with the fringe reaching farther (kept only when fewer crossings are left).
     for &factor in LAST_RESORT_REACH {
-        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
+        if crossings_left(&a) == 0 {
             break;
         }
         let wide = FuseOptions {
