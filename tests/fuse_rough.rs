@@ -30,11 +30,11 @@ const FOREIGN: Bounds = Bounds {
     widened: 0,
 };
 /// Rough phantom exports (much rougher than the foreign jaws: 4x their crossing crown pairs per
-/// crown on dense exports): at most 10.7 % trimmed (a coarse crown of a few hundred vertices;
-/// at most 3.2 % on the rough and dense ones); the fringe trimmed beyond 0.3 mm (at most
+/// crown on dense exports): at most 7.9 % trimmed (a coarse crown of a few hundred vertices;
+/// at most 3.3 % on the rough and dense ones); the fringe trimmed beyond 0.3 mm (at most
 /// 0.52 mm) on 12 teeth of the 20 jaws, at most 2 per jaw.
 const ROUGH: Bounds = Bounds {
-    trimmed_share: 0.11,
+    trimmed_share: 0.08,
     widened: 2,
 };
 
@@ -198,9 +198,13 @@ fn coarse_and_partial_arches() {
         (22, Lower, PartialArch, IosExport::Dense2),
         (23, Upper, PartialArch, IosExport::Rough),
     ]);
-    // Coarse crowns with slits at their margins (measured: seed 16 tooth 46, seed 21 tooth 15)
-    // are fused with the slits closed.
-    assert!(inlets >= 1, "no slit at a margin closed");
+    // Coarse and rough crowns with slits at their margins whose first band build crosses the
+    // crown are fused with the slits closed (measured: 19 teeth of these 8 jaws, among them
+    // seed 16 tooth 46 and seed 21 tooth 15).
+    assert!(
+        inlets >= 10,
+        "{inlets} teeth with slits at the margin closed"
+    );
 }
 
 /// Dense exports (2x, 4x, subdivided): ~2.5 min of CPU, outside the test command's time budget;

@@ -191,7 +191,17 @@ pub(super) fn builds(
     side: CrownSide,
     opts: &FuseOptions,
 ) -> Result<(Assembled, super::fringe::FringeTrim)> {
-    let (kept, kept_trim, kept_side) = build_attempts(ct, side, opts)?;
+    builds_from(ct, side, opts, None)
+}
+
+/// [`builds`], with `first` the first build from `side` when it is already made.
+pub(super) fn builds_from(
+    ct: &CutTooth,
+    side: CrownSide,
+    opts: &FuseOptions,
+    first: Option<Assembled>,
+) -> Result<(Assembled, super::fringe::FringeTrim)> {
+    let (kept, kept_trim, kept_side) = build_attempts(ct, side, opts, first)?;
     polish(ct, opts, kept, kept_trim, kept_side)
 }
 
@@ -202,6 +212,7 @@ fn build_attempts(
     ct: &CutTooth,
     mut side: CrownSide,
     opts: &FuseOptions,
+    mut first: Option<Assembled>,
 ) -> Result<(Assembled, super::fringe::FringeTrim, CrownSide)> {
     let mut trimmed = ct.trimmed;
     // Where the band cannot clear a crown face within the fringe, that face goes (with the faces
@@ -209,7 +220,10 @@ fn build_attempts(
     // the one with the fewest crossings left is kept (the earliest, least trimmed, on a tie).
     let mut best: Option<(Assembled, super::fringe::FringeTrim, CrownSide)> = None;
     for attempt in 1..=MAX_ATTEMPTS {
-        let a = assemble(ct, &side, opts)?;
+        let a = match first.take() {
+            Some(a) => a,
+            None => assemble(ct, &side, opts)?,
+        };
         let hits = if crossings_left(&a) > 0 {
             crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
         } else {
@@ -352,8 +366,8 @@ fn polish_step(
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
-    let (a, trimmed) = builds(ct, cut_side(ct), opts)?;
-    let (a, trimmed, inlets_closed) = super::remedy::remedies(ct, opts, a, trimmed, &mut warnings);
+    let (a, trimmed, start, inlets_closed) = super::remedy::first_builds(ct, opts, &mut warnings)?;
+    let (a, trimmed) = super::remedy::remedies(ct, opts, a, trimmed, &start, &mut warnings);
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
@@ -487,7 +501,7 @@ pub(super) fn crossings_left(a: &Assembled) -> usize {
 
 /// Builds the band between `side`'s margin and the root's cut loop, assembles crown + band +
 /// root, and optimises and untangles the band (as `opts.stitch` says).
-fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
+pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
     let (margin, frame, rc) = (&side.margin, &ct.frame, &ct.root);
     let mut mesh = side.crown.clone();
     let mut ios_vertex = side.ios_vertex.clone();

@@ -41,8 +41,12 @@ pub fn close_inlets(crown: &mut TriMesh) -> InletReport {
             break;
         }
         let lp = &loops[0];
+        let candidates = inlets(crown, lp);
+        if candidates.is_empty() {
+            break;
+        }
         let topo = EdgeTopology::new(crown);
-        let closed = inlets(crown, lp)
+        let closed = candidates
             .into_iter()
             .find_map(|(i, j, len)| zip(crown, &topo, lp, i, j).map(|faces| (faces, len)));
         let Some((faces, len)) = closed else {

@@ -1,11 +1,15 @@
-//! The last remedies for a tooth the band builds leave crossed: the narrow slits of its
-//! margin closed ([`super::inlet`]), then the fringe reaching farther than the default reach.
-//! Each is kept only when it leaves fewer crossings; a remedy that fails to build is skipped.
+//! The builds of a tooth from its crown with the margin's narrow slits closed
+//! ([`super::inlet`]), and the last remedy for a tooth those builds leave crossed: the fringe
+//! reaching farther than the default reach, kept only when it leaves fewer crossings (a remedy
+//! that fails to build is skipped).
 
 use super::FuseOptions;
-use super::assembly::{Assembled, builds, crossings_left, trimmed_side};
+use super::assembly::{
+    Assembled, CrownSide, assemble, builds, builds_from, crossings_left, cut_side, trimmed_side,
+};
 use super::fringe::FringeTrim;
 use super::tooth::CutTooth;
+use crate::Result;
 
 /// Factors of the fringe reach for a tooth the builds within the reach left crossed, tried in
 /// turn while crossings are left. On coarse crowns (edges of 0.3-0.5 mm) one ring of faces
@@ -13,41 +17,65 @@ use super::tooth::CutTooth;
 /// builds leave crossed is clear after these builds, trimmed at most 0.52 mm from the margin.
 pub(super) const LAST_RESORT_REACH: &[f64] = &[2.0, 3.0];
 
-/// The remedies for build `a` (trim `trimmed`) of `ct`, tried in turn while crossings are left
-/// (none with the fringe off); each one kept adds a warning. Returns the build kept, its trim
-/// and the number of slits closed.
+/// The builds of `ct` ([`builds`]) from its crown as cut. Where the first build leaves the band
+/// crossing the crown and the margin has narrow slits ([`super::inlet`]; with the fringe on),
+/// the builds from the crown with those slits closed come first, since no band laid from a
+/// slit's margin can clear the crown wall below it: kept when they leave no crossing, else
+/// when they leave fewer than the builds from the crown as cut (a closed crown that fails to
+/// build is skipped). Returns the build, its trim, the crown side built on and the number of
+/// slits closed; a closure kept adds a warning.
+pub(super) fn first_builds(
+    ct: &CutTooth,
+    opts: &FuseOptions,
+    warnings: &mut Vec<String>,
+) -> Result<(Assembled, FringeTrim, CrownSide, usize)> {
+    let side = cut_side(ct);
+    let first = assemble(ct, &side, opts)?;
+    if crossings_left(&first) > 0 && opts.fringe_reach_mm > 0.0 {
+        let mut crown = ct.crown.clone();
+        let r = super::inlet::close_inlets(&mut crown);
+        if r.closed > 0 {
+            let closed = trimmed_side(ct, crown, ct.ios_vertex.clone());
+            let from_closed = builds(ct, closed.clone(), opts).ok();
+            let from_cut = match from_closed {
+                Some((ref b, _)) if crossings_left(b) == 0 => None,
+                _ => Some(builds_from(ct, side.clone(), opts, Some(first))?),
+            };
+            let use_closed = from_closed.as_ref().is_some_and(|(b, _)| {
+                from_cut
+                    .as_ref()
+                    .is_none_or(|(a, _)| crossings_left(b) < crossings_left(a))
+            });
+            if use_closed && let Some((b, t)) = from_closed {
+                warnings.push(format!(
+                    "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
+                    r.closed, r.faces, r.length_mm
+                ));
+                return Ok((b, t, closed, r.closed));
+            }
+            let (a, t) = from_cut.expect("built from the cut crown unless the closed one won");
+            return Ok((a, t, side, 0));
+        }
+    }
+    let (a, t) = builds_from(ct, side.clone(), opts, Some(first))?;
+    Ok((a, t, side, 0))
+}
+
+/// The last remedy for build `a` (trim `trimmed`) of `ct` from the crown side `start`, while
+/// crossings are left (none with the fringe off): the builds made again with the fringe
+/// reaching farther ([`LAST_RESORT_REACH`]), each kept only when it leaves fewer crossings and
+/// then warned. Returns the build kept and its trim.
 pub(super) fn remedies(
     ct: &CutTooth,
     opts: &FuseOptions,
     mut a: Assembled,
     mut trimmed: FringeTrim,
+    start: &CrownSide,
     warnings: &mut Vec<String>,
-) -> (Assembled, FringeTrim, usize) {
-    if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
-        return (a, trimmed, 0);
+) -> (Assembled, FringeTrim) {
+    if opts.fringe_reach_mm <= 0.0 {
+        return (a, trimmed);
     }
-    let mut start = super::assembly::cut_side(ct);
-    let mut inlets_closed = 0;
-    // Where the band crosses the crown, a slit in the crown at the margin (the margin running
-    // up into the crown and back beside itself) may be what it cannot clear: the slits are
-    // closed ([`super::inlet`]) and the builds made again, kept only with fewer crossings.
-    let mut crown = ct.crown.clone();
-    let r = super::inlet::close_inlets(&mut crown);
-    if r.closed > 0 {
-        let side = trimmed_side(ct, crown, ct.ios_vertex.clone());
-        // A remedy that fails to build is skipped: the tooth keeps the build it has.
-        if let Ok((b, t)) = builds(ct, side.clone(), opts)
-            && crossings_left(&b) < crossings_left(&a)
-        {
-            warnings.push(format!(
-                "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
-                r.closed, r.faces, r.length_mm
-            ));
-            (a, trimmed, start, inlets_closed) = (b, t, side, r.closed);
-        }
-    }
-    // Where the builds within the reach leave the band crossing the crown, the builds are made
-    // again with the fringe reaching farther (kept only when fewer crossings are left).
     for &factor in LAST_RESORT_REACH {
         if crossings_left(&a) == 0 {
             break;
@@ -56,6 +84,7 @@ pub(super) fn remedies(
             fringe_reach_mm: opts.fringe_reach_mm * factor,
             ..*opts
         };
+        // A remedy that fails to build is skipped: the tooth keeps the build it has.
         if let Ok((b, t)) = builds(ct, start.clone(), &wide)
             && crossings_left(&b) < crossings_left(&a)
         {
@@ -66,7 +95,7 @@ pub(super) fn remedies(
             (a, trimmed) = (b, t);
         }
     }
-    (a, trimmed, inlets_closed)
+    (a, trimmed)
 }
 
 /// The largest of [`LAST_RESORT_REACH`]: how far from the margin the crown's distances are
