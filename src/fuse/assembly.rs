@@ -1,10 +1,12 @@
 //! The stitching stage of one tooth: the band between the crown's margin and the root's cut
 //! loop, crown + band + root assembled into one closed mesh, the band untangled, and where a
 //! crossing the untangling cannot remove is left, the crown's fringe trimmed and the band built
-//! again; where crossings are left after the builds, the best one's crown loses the faces on its
-//! pierced margin edges and its band is built once more with other tangent lengths.
+//! again (the crossed crown faces: [`super::crossed`]); where crossings are left after the
+//! builds, the best one is polished ([`super::polish`]).
 
+use super::crossed::{crown_faces_hit, pierced_margin_faces};
 use super::fringe::Listed;
+use super::polish::polish;
 use super::quality;
 use super::tooth::{CutTooth, FusedTooth, loop_chords, loop_dirs, margin_pts_of};
 use super::{FuseOptions, VertexSource};
@@ -25,7 +27,8 @@ pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
 /// the margin, the crown's chords and its vertices' IOS input indices.
 #[derive(Clone)]
 pub(super) struct CrownSide {
-    crown: TriMesh,
+    /// The crown (its single boundary loop is the margin).
+    pub(super) crown: TriMesh,
     margin: Vec<u32>,
     dirs: Vec<DVec3>,
     chords: Vec<(BandVertex, BandVertex)>,
@@ -35,7 +38,7 @@ pub(super) struct CrownSide {
 impl CrownSide {
     /// This crown's fringe trimmed for the `listed` faces ([`super::fringe::trim_fringe`]) by
     /// the first of `modes` that removes anything; `None` for an empty list or when none does.
-    fn trim(
+    pub(super) fn trim(
         &self,
         ct: &CutTooth,
         reach: f64,
@@ -60,105 +63,16 @@ impl CrownSide {
 
 /// Crown + band + root of one attempt, with what the untangling left.
 pub(super) struct Assembled {
-    mesh: TriMesh,
-    source: Vec<u8>,
-    ios_vertex: Vec<u32>,
-    band: std::ops::Range<usize>,
-    untangle: Option<super::untangle::UntangleReport>,
-}
-
-/// Crown faces (indices below `band.start`) to trim for the crossing pairs the untangling left:
-/// the crown faces in a pair, or with `ring` those and every crown face sharing a vertex with
-/// one (where trimming the faces alone has not cleared the band, it mostly crosses their
-/// neighbours next); when no pair has a crown face (band with band or root), the crown faces at
-/// the margin vertices of its band faces, so that the margin there moves and the band is laid
-/// out anew.
-fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) -> Vec<u32> {
-    let Some(u) = &a.untangle else {
-        return Vec::new();
-    };
-    let is_crown = |f: u32| (f as usize) < a.band.start;
-    let corners = |f: u32| a.mesh.triangles[f as usize].into_iter();
-    let mut hit: Vec<u32> = u
-        .crossing_pairs
-        .iter()
-        .flat_map(|&(f, g)| [f, g])
-        .filter(|&f| is_crown(f))
-        .collect();
-    if !ring && !hit.is_empty() {
-        hit.sort_unstable();
-        hit.dedup();
-        return hit;
-    }
-    let mut at: Vec<u32> = hit.into_iter().flat_map(corners).collect();
-    if at.is_empty() {
-        at = u
-            .crossing_pairs
-            .iter()
-            .flat_map(|&(f, g)| [f, g])
-            .filter(|&f| a.band.contains(&(f as usize)))
-            .flat_map(corners)
-            .filter(|&x| (x as usize) < crown_vertices)
-            .collect();
-    }
-    at.sort_unstable();
-    at.dedup();
-    if at.is_empty() {
-        return Vec::new();
-    }
-    (0..a.band.start as u32)
-        .filter(|&f| corners(f).any(|x| at.binary_search(&x).is_ok()))
-        .collect()
-}
-
-/// The crown faces on a margin edge of a band face that crosses a crown face `g`, where the crown
-/// face on that edge crosses `g` too: the margin edge then passes through `g` (a fold of the
-/// crown at the margin), so no band face on that edge can clear `g` however its free corner
-/// moves; the margin there has to move (or `g` go).
-fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
-    let Some(u) = &a.untangle else {
-        return Vec::new();
-    };
-    let is_crown = |f: u32| (f as usize) < a.band.start;
-    // The margin edges (both corners crown vertices) of the band faces that cross a crown face,
-    // each with that crown face `g`, keyed by the edge's sorted corners.
-    let mut edges: Vec<((u32, u32), u32)> = Vec::new();
-    for &(f, g) in &u.crossing_pairs {
-        let (band_face, g) = match (is_crown(f), is_crown(g)) {
-            (false, true) => (f, g),
-            (true, false) => (g, f),
-            _ => continue,
-        };
-        if !a.band.contains(&(band_face as usize)) {
-            continue;
-        }
-        let t = a.mesh.triangles[band_face as usize];
-        for k in 0..3 {
-            let (p, q) = (t[k], t[(k + 1) % 3]);
-            if (p as usize) < crown_vertices && (q as usize) < crown_vertices {
-                edges.push(((p.min(q), p.max(q)), g));
-            }
-        }
-    }
-    if edges.is_empty() {
-        return Vec::new();
-    }
-    edges.sort_unstable();
-    // One pass over the crown faces: those on one of the edges that cross its `g` too.
-    let mut out = Vec::new();
-    for (c, ct) in a.mesh.triangles[..a.band.start].iter().enumerate() {
-        for k in 0..3 {
-            let (p, q) = (ct[k], ct[(k + 1) % 3]);
-            let key = (p.min(q), p.max(q));
-            let from = edges.partition_point(|e| e.0 < key);
-            for &(_, g) in edges[from..].iter().take_while(|e| e.0 == key) {
-                if c as u32 != g && crate::mesh_check::triangles_intersect(&a.mesh, c, g as usize) {
-                    out.push(c as u32);
-                }
-            }
-        }
-    }
-    out
+    /// Crown, band and root in one mesh (crown faces first, then the band's, then the root's).
+    pub(super) mesh: TriMesh,
+    /// Per vertex: its [`VertexSource`] as a byte.
+    pub(super) source: Vec<u8>,
+    /// Per vertex: its IOS input index (`u32::MAX` for band and root vertices).
+    pub(super) ios_vertex: Vec<u32>,
+    /// The band's faces in `mesh`.
+    pub(super) band: std::ops::Range<usize>,
+    /// What the untangling did and left (`None` without untangling).
+    pub(super) untangle: Option<super::untangle::UntangleReport>,
 }
 
 /// Band builds per tooth at most (the first and the rebuilds after trimming the fringe). Each
@@ -278,91 +192,6 @@ fn retrim(
     r.or_else(|| side.trim(ct, reach, &pierced, &[Listed::MarginEdge]))
 }
 
-/// After the builds, for a kept build still crossed: its crown loses the faces on its pierced
-/// margin edges, or else only the crown faces the band still crosses, while that leaves fewer
-/// crossings (up to [`POLISH_ROUNDS`] steps, [`polish_step`]), then the band is built again
-/// with other tangent lengths ([`reshaped`]). Returns the build and the tooth's trim.
-fn polish(
-    ct: &CutTooth,
-    opts: &FuseOptions,
-    kept: Assembled,
-    kept_trim: super::fringe::FringeTrim,
-    kept_side: CrownSide,
-) -> Result<(Assembled, super::fringe::FringeTrim)> {
-    let (mut a, mut trimmed, mut best_side) = (kept, kept_trim, kept_side.clone());
-    let mut kept_build: Option<Assembled> = None;
-    // The later builds may have fared worse than the kept one: from the kept crown, only the
-    // faces on its pierced margin edges go, while that leaves fewer crossings.
-    for _ in 0..POLISH_ROUNDS {
-        if crossings_left(&a) == 0 || opts.fringe_reach_mm <= 0.0 {
-            break;
-        }
-        let Some((b, next, t)) = polish_step(ct, opts, &a, &best_side)? else {
-            break;
-        };
-        if kept_build.is_none() {
-            kept_build = Some(std::mem::replace(&mut a, b));
-        } else {
-            a = b;
-        }
-        add_trim(&mut trimmed, &t);
-        best_side = next;
-    }
-    if crossings_left(&a) > 0 {
-        a = reshaped(ct, &best_side, opts, a);
-        // The kept build reshaped may still beat the polished one (then its smaller trim).
-        if let Some(k) = kept_build.filter(|k| crossings_left(k) > 0) {
-            let k = reshaped(ct, &kept_side, opts, k);
-            if crossings_left(&k) <= crossings_left(&a) {
-                a = k;
-                trimmed = kept_trim;
-            }
-        }
-    }
-    Ok((a, trimmed))
-}
-
-/// One polishing step of build `a` on `side`: its crown loses the faces on its pierced margin
-/// edges ([`pierced_margin_faces`], [`Listed::MarginEdge`]); where that leaves no fewer
-/// crossings, only the crown faces the band still crosses (within the reach, else with an
-/// apex beyond it, else on a margin edge whatever the reach: no vertex beyond the reach is
-/// lost). Returns the first of these builds with fewer crossings left, its crown side and trim.
-fn polish_step(
-    ct: &CutTooth,
-    opts: &FuseOptions,
-    a: &Assembled,
-    side: &CrownSide,
-) -> Result<Option<(Assembled, CrownSide, super::fringe::FringeTrim)>> {
-    let (n, reach) = (side.crown.positions.len(), opts.fringe_reach_mm);
-    for stage in 0..2 {
-        let cut = if stage == 0 {
-            side.trim(
-                ct,
-                reach,
-                &pierced_margin_faces(a, n),
-                &[Listed::MarginEdge],
-            )
-        } else {
-            let hit = crown_faces_hit(a, n, false);
-            side.trim(
-                ct,
-                reach,
-                &hit,
-                &[Listed::Within, Listed::Apex, Listed::MarginEdge],
-            )
-        };
-        let Some((crown, map, t)) = cut else {
-            continue;
-        };
-        let next = trimmed_side(ct, crown, map);
-        let b = assemble(ct, &next, opts)?;
-        if crossings_left(&b) < crossings_left(a) {
-            return Ok(Some((b, next, t)));
-        }
-    }
-    Ok(None)
-}
-
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
@@ -443,11 +272,8 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     })
 }
 
-/// Rounds of trimming the kept build's pierced margin faces after the builds, at most.
-const POLISH_ROUNDS: usize = 3;
-
 /// Adds one trim's counts to the tooth's.
-fn add_trim(total: &mut super::fringe::FringeTrim, t: &super::fringe::FringeTrim) {
+pub(super) fn add_trim(total: &mut super::fringe::FringeTrim, t: &super::fringe::FringeTrim) {
     total.faces += t.faces;
     total.vertices += t.vertices;
     total.max_reach_mm = total.max_reach_mm.max(t.max_reach_mm);
@@ -467,31 +293,6 @@ pub(super) fn trimmed_side(ct: &CutTooth, crown: TriMesh, map: Vec<u32>) -> Crow
         margin,
         ios_vertex: map,
     }
-}
-
-/// Hermite tangent lengths (fractions of the loop-to-loop distance) of the band builds tried
-/// again on the best attempt's crown where crossings are left: a band leaving the margin
-/// steeper or flatter than the default passes a fold at the margin on another side.
-const RESHAPE_TANGENTS: [f64; 4] = [0.4, 1.2, 0.0, 1.6];
-
-/// Builds the band on `side` again with other tangent lengths ([`RESHAPE_TANGENTS`]) and keeps
-/// the build with the fewest crossings left (`best`, the default's, on a tie; a build that
-/// fails is skipped). Only teeth still crossed after the trimming attempts pay for it.
-fn reshaped(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions, mut best: Assembled) -> Assembled {
-    for t in RESHAPE_TANGENTS {
-        if crossings_left(&best) == 0 {
-            break;
-        }
-        let mut o = *opts;
-        o.stitch.tangent_scale = t;
-        let Ok(a) = assemble(ct, side, &o) else {
-            continue;
-        };
-        if crossings_left(&a) < crossings_left(&best) {
-            best = a;
-        }
-    }
-    best
 }
 
 /// Intersecting face pairs with a band face the untangling left (0 without untangling).

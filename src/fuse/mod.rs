@@ -5,10 +5,12 @@
 mod assembly;
 mod band_crossings;
 mod band_opt;
+mod crossed;
 pub mod fringe;
 mod inlet;
 mod jaw;
 mod near_faces;
+mod polish;
 pub mod quality;
 mod remedy;
 mod tooth;
