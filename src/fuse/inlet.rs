@@ -92,10 +92,11 @@ fn inlets(crown: &TriMesh, lp: &[u32]) -> Vec<(usize, usize, f64)> {
 
 /// The strip closing the inlet of loop `lp` from position `i` to `j`: the two sides zipped from
 /// the mouth inwards, each step advancing the side whose next diagonal is shorter. `None` when
-/// the loop passes one of the inlet's vertices twice, a diagonal is already an edge of the crown, or a strip face
-/// crosses the crown (or another strip face).
+/// the loop passes one of the inlet's vertices twice, a diagonal is already an edge of the
+/// crown, or a strip face crosses the crown (or another strip face). The crown is left as it
+/// was (the strip is appended to test it, then removed).
 fn zip(
-    crown: &TriMesh,
+    crown: &mut TriMesh,
     topo: &EdgeTopology,
     lp: &[u32],
     i: usize,
@@ -114,7 +115,8 @@ fn zip(
     {
         return None;
     }
-    let at = |v: u32| crown.positions[v as usize];
+    let positions = &crown.positions;
+    let at = |v: u32| positions[v as usize];
     let (mut a, mut b) = (0usize, side.len() - 1);
     let mut faces = Vec::with_capacity(side.len() - 2);
     // The loop runs a → a+1 along crown faces: a strip face uses each loop edge reversed.
@@ -139,18 +141,20 @@ fn zip(
         }
         faces.push(face);
     }
-    let mut with = crown.clone();
-    let first = with.triangles.len() as u32;
-    with.triangles.extend_from_slice(&faces);
-    let strip: Vec<u32> = (first..with.triangles.len() as u32).collect();
     let degenerate = faces.iter().any(|t| {
         let [p, q, r] = t.map(at);
         (q - p).cross(r - p).length_squared() <= f64::EPSILON * (q - p).length_squared().max(1e-30)
     });
-    if degenerate || !super::fringe::crossing_pairs(&with, &strip).is_empty() {
+    if degenerate {
         return None;
     }
-    Some(faces)
+    // The strip is tested in place: appended to the crown, then taken off again.
+    let first = crown.triangles.len();
+    crown.triangles.extend_from_slice(&faces);
+    let strip: Vec<u32> = (first as u32..crown.triangles.len() as u32).collect();
+    let crossed = !super::fringe::crossing_pairs(crown, &strip).is_empty();
+    crown.triangles.truncate(first);
+    (!crossed).then_some(faces)
 }
 
 #[cfg(test)]
@@ -263,5 +267,36 @@ mod tests {
             "{was:?} -> {now:?}"
         );
         assert!(crate::mesh_check::self_intersections(&m).is_empty());
+    }
+
+    #[test]
+    fn an_inlet_whose_loop_passes_one_of_its_vertices_twice_is_not_zipped() {
+        let mut m = slit_grid(12, 0.25, 5, 8);
+        let lp = boundary_loops(&m)[0].clone();
+        let topo = EdgeTopology::new(&m);
+        let before = m.clone();
+        // The inlet close_inlets zips: the first candidate whose strip is valid.
+        let (i, j, _) = inlets(&m, &lp)
+            .into_iter()
+            .find(|&(i, j, _)| zip(&mut m, &topo, &lp, i, j).is_some())
+            .expect("the slit can be zipped");
+        assert_eq!(m, before, "the crown is left as it was");
+        // The same loop passing the slit's innermost vertex once more away from the slit, as a
+        // loop pinched at that vertex does: the strip alone would be valid (it is the one above),
+        // but closing it would leave the vertex's other boundary fan open beside it.
+        let n = lp.len();
+        let inner = lp[(i + ((j + n - i) % n) / 2) % n];
+        let away = (j + (n - (j + n - i) % n) / 2) % n;
+        let mut pinched = lp.clone();
+        pinched.insert(away + 1, inner);
+        let pos = |v: u32| pinched.iter().position(|&w| w == v).unwrap();
+        let (pi, pj) = (pos(lp[i]), pos(lp[j]));
+        assert_eq!(
+            (pj + pinched.len() - pi) % pinched.len(),
+            (j + n - i) % n,
+            "the inlet's side is the same"
+        );
+        assert!(zip(&mut m, &topo, &pinched, pi, pj).is_none());
+        assert_eq!(m, before);
     }
 }
