@@ -165,14 +165,9 @@ pub fn trim_fringe(
     extra: &[u32],
     listed_mode: Listed,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
-    let listed_apex = listed_mode >= Listed::Apex;
     let mut mesh = crown.clone();
     let mut map = src.to_vec();
     let mut report = FringeTrim::default();
-    let in_reach = |map: &[u32], v: u32| {
-        let s = map[v as usize];
-        s != u32::MAX && dist_in.get(s as usize).is_some_and(|&d| d <= reach)
-    };
     // The faces of `extra`, for the first round only (the crown changes after it).
     let mut listed = vec![false; mesh.triangles.len()];
     for &f in extra {
@@ -181,107 +176,24 @@ pub fn trim_fringe(
         }
     }
     for _ in 0..4 {
-        let is_listed = |f: u32| listed.get(f as usize).copied().unwrap_or(false);
-        // Built when first needed (a round with nothing to remove does not need it).
-        let topo_cell = std::cell::OnceCell::new();
-        let topo = || topo_cell.get_or_init(|| crate::mesh::EdgeTopology::new(&mesh));
-        let on_edge = |a: u32, b: u32| topo().edge_face_count(a, b) == 1;
-        let on_margin_edge = |f: usize| {
-            let t = mesh.triangles[f];
-            (0..3).any(|k| on_edge(t[k], t[(k + 1) % 3]))
+        report.rounds += 1;
+        let round = Round {
+            mesh: &mesh,
+            map: &map,
+            dist_in,
+            reach,
+            listed: &listed,
+            mode: listed_mode,
+            topo: std::cell::OnceCell::new(),
         };
-        let fringe: Vec<u32> = (0..mesh.triangles.len() as u32)
-            .filter(|&f| {
-                let near = mesh.triangles[f as usize]
-                    .iter()
-                    .filter(|&&v| in_reach(&map, v))
-                    .count();
-                near == 3
-                    || (listed_apex && near == 2 && is_listed(f))
-                    || (listed_mode == Listed::MarginEdge
-                        && is_listed(f)
-                        && on_margin_edge(f as usize))
-            })
-            .collect();
-        let is_fringe = {
-            let mut v = vec![false; mesh.triangles.len()];
-            for &f in &fringe {
-                v[f as usize] = true;
-            }
-            v
-        };
-        // Of a crossing pair one face has to go: the one nearer the margin (so the least of the
-        // crown goes), or the only one in the fringe.
-        // Vertices that are no input vertex (a filled hole's) have no distance: they do not count.
-        let depth = |f: u32| {
-            mesh.triangles[f as usize]
-                .iter()
-                .filter_map(|&v| dist_in.get(map[v as usize] as usize))
-                .fold(f64::INFINITY, |a, &d| a.min(d))
-        };
-        let mut bad = vec![false; mesh.triangles.len()];
-        for (f, g) in crossing_pairs(&mesh, &fringe) {
-            let pick = match (is_fringe[f as usize], is_fringe[g as usize]) {
-                (true, true) if depth(g) < depth(f) => g,
-                (true, _) => f,
-                _ => g,
-            };
-            bad[pick as usize] = true;
-        }
-        for (b, &l) in bad.iter_mut().zip(&listed) {
-            *b |= l;
-        }
-        listed.clear();
+        let (fringe, is_fringe) = round.fringe();
+        let bad = round.targets(&fringe, &is_fringe);
         if !bad.contains(&true) {
             // Nothing to remove: the round ends as the peel would, without its topology.
-            report.rounds += 1;
             break;
         }
-        // Only faces with an edge on the margin go in one round (peeling): removing a face
-        // deeper in would cut a slot into the crown, and a margin that doubles back on itself
-        // no longer charts around the tooth. What lies under a removed face is looked at again
-        // in the next round.
-        let mut boundary_vertex = vec![false; mesh.positions.len()];
-        for t in &mesh.triangles {
-            for k in 0..3 {
-                if on_edge(t[k], t[(k + 1) % 3]) {
-                    boundary_vertex[t[k] as usize] = true;
-                    boundary_vertex[t[(k + 1) % 3] as usize] = true;
-                }
-            }
-        }
-        // A target with an edge on the margin goes alone; one touching the margin at a vertex
-        // only goes with that vertex's whole fan (removing it alone would pinch the margin).
-        let mut remove = vec![false; mesh.triangles.len()];
-        let mut fans: Vec<u32> = Vec::new();
-        for f in (0..mesh.triangles.len()).filter(|&f| is_fringe[f] && bad[f]) {
-            let t = mesh.triangles[f];
-            if on_margin_edge(f) {
-                remove[f] = true;
-            } else {
-                fans.extend(t.iter().copied().filter(|&v| boundary_vertex[v as usize]));
-            }
-        }
-        if !fans.is_empty() {
-            fans.sort_unstable();
-            fans.dedup();
-            let mut fan_faces: Vec<Vec<usize>> = vec![Vec::new(); fans.len()];
-            for (f, t) in mesh.triangles.iter().enumerate() {
-                for v in t {
-                    if let Ok(i) = fans.binary_search(v) {
-                        fan_faces[i].push(f);
-                    }
-                }
-            }
-            for faces in fan_faces {
-                if listed_apex || faces.iter().all(|&f| is_fringe[f]) {
-                    for f in faces {
-                        remove[f] = true;
-                    }
-                }
-            }
-        }
-        report.rounds += 1;
+        let mut remove = round.removal(&is_fringe, &bad);
+        listed.clear();
         let Some((rep, next, removed)) = peel(&mesh, &map, &mut remove, dist_in, reach) else {
             break;
         };
@@ -292,6 +204,160 @@ pub fn trim_fringe(
     if report.faces == 0 {
         return None;
     }
+    count_lost(src, &map, dist_in, &mut report);
+    Some((mesh, map, report))
+}
+
+/// One round of [`trim_fringe`] on the crown as it is: which faces are fringe, which of them
+/// have to go, and what goes with them.
+struct Round<'a> {
+    mesh: &'a TriMesh,
+    /// Per crown vertex: its input vertex (`u32::MAX` for a filled hole's).
+    map: &'a [u32],
+    dist_in: &'a [f64],
+    reach: f64,
+    /// Per face: listed by the caller (first round only; empty after).
+    listed: &'a [bool],
+    mode: Listed,
+    /// The crown's topology, built when first needed (a round with nothing to remove does not
+    /// need it).
+    topo: std::cell::OnceCell<crate::mesh::EdgeTopology>,
+}
+
+impl Round<'_> {
+    fn topo(&self) -> &crate::mesh::EdgeTopology {
+        self.topo
+            .get_or_init(|| crate::mesh::EdgeTopology::new(self.mesh))
+    }
+
+    fn in_reach(&self, v: u32) -> bool {
+        let s = self.map[v as usize];
+        s != u32::MAX
+            && self
+                .dist_in
+                .get(s as usize)
+                .is_some_and(|&d| d <= self.reach)
+    }
+
+    fn is_listed(&self, f: u32) -> bool {
+        self.listed.get(f as usize).copied().unwrap_or(false)
+    }
+
+    fn on_edge(&self, a: u32, b: u32) -> bool {
+        self.topo().edge_face_count(a, b) == 1
+    }
+
+    fn on_margin_edge(&self, f: usize) -> bool {
+        let t = self.mesh.triangles[f];
+        (0..3).any(|k| self.on_edge(t[k], t[(k + 1) % 3]))
+    }
+
+    /// The fringe faces (every corner within the reach, or listed as the mode allows), as a
+    /// list and as a mask over the faces.
+    fn fringe(&self) -> (Vec<u32>, Vec<bool>) {
+        let apex = self.mode >= Listed::Apex;
+        let fringe: Vec<u32> = (0..self.mesh.triangles.len() as u32)
+            .filter(|&f| {
+                let near = self.mesh.triangles[f as usize]
+                    .iter()
+                    .filter(|&&v| self.in_reach(v))
+                    .count();
+                near == 3
+                    || (apex && near == 2 && self.is_listed(f))
+                    || (self.mode == Listed::MarginEdge
+                        && self.is_listed(f)
+                        && self.on_margin_edge(f as usize))
+            })
+            .collect();
+        let mut is_fringe = vec![false; self.mesh.triangles.len()];
+        for &f in &fringe {
+            is_fringe[f as usize] = true;
+        }
+        (fringe, is_fringe)
+    }
+
+    /// Per face: whether it has to go. Of a crossing pair one face has to go: the one nearer
+    /// the margin (so the least of the crown goes), or the only one in the fringe; and every
+    /// listed face.
+    fn targets(&self, fringe: &[u32], is_fringe: &[bool]) -> Vec<bool> {
+        // Vertices that are no input vertex (a filled hole's) have no distance: they do not
+        // count.
+        let depth = |f: u32| {
+            self.mesh.triangles[f as usize]
+                .iter()
+                .filter_map(|&v| self.dist_in.get(self.map[v as usize] as usize))
+                .fold(f64::INFINITY, |a, &d| a.min(d))
+        };
+        let mut bad = vec![false; self.mesh.triangles.len()];
+        for (f, g) in crossing_pairs(self.mesh, fringe) {
+            let pick = match (is_fringe[f as usize], is_fringe[g as usize]) {
+                (true, true) if depth(g) < depth(f) => g,
+                (true, _) => f,
+                _ => g,
+            };
+            bad[pick as usize] = true;
+        }
+        for (b, &l) in bad.iter_mut().zip(self.listed) {
+            *b |= l;
+        }
+        bad
+    }
+
+    /// The faces to remove this round for the fringe targets `bad`. Only faces with an edge on
+    /// the margin go in one round (peeling): removing a face deeper in would cut a slot into
+    /// the crown, and a margin that doubles back on itself no longer charts around the tooth.
+    /// What lies under a removed face is looked at again in the next round. A target with an
+    /// edge on the margin goes alone; one touching the margin at a vertex only goes with that
+    /// vertex's whole fan (removing it alone would pinch the margin).
+    fn removal(&self, is_fringe: &[bool], bad: &[bool]) -> Vec<bool> {
+        let mesh = self.mesh;
+        let mut boundary_vertex = vec![false; mesh.positions.len()];
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                if self.on_edge(t[k], t[(k + 1) % 3]) {
+                    boundary_vertex[t[k] as usize] = true;
+                    boundary_vertex[t[(k + 1) % 3] as usize] = true;
+                }
+            }
+        }
+        let mut remove = vec![false; mesh.triangles.len()];
+        let mut fans: Vec<u32> = Vec::new();
+        for f in (0..mesh.triangles.len()).filter(|&f| is_fringe[f] && bad[f]) {
+            if self.on_margin_edge(f) {
+                remove[f] = true;
+            } else {
+                let t = mesh.triangles[f];
+                fans.extend(t.iter().copied().filter(|&v| boundary_vertex[v as usize]));
+            }
+        }
+        if fans.is_empty() {
+            return remove;
+        }
+        fans.sort_unstable();
+        fans.dedup();
+        let mut fan_faces: Vec<Vec<usize>> = vec![Vec::new(); fans.len()];
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for v in t {
+                if let Ok(i) = fans.binary_search(v) {
+                    fan_faces[i].push(f);
+                }
+            }
+        }
+        let apex = self.mode >= Listed::Apex;
+        for faces in fan_faces {
+            if apex || faces.iter().all(|&f| is_fringe[f]) {
+                for f in faces {
+                    remove[f] = true;
+                }
+            }
+        }
+        remove
+    }
+}
+
+/// Counts into `report` the input vertices of `src` that `map` (the trimmed crown's) no longer
+/// holds, and the farthest of them from the original margin.
+fn count_lost(src: &[u32], map: &[u32], dist_in: &[f64], report: &mut FringeTrim) {
     let mut had = vec![false; dist_in.len()];
     for &s in src.iter().filter(|&&s| s != u32::MAX) {
         had[s as usize] = true;
@@ -305,7 +371,6 @@ pub fn trim_fringe(
             report.max_reach_mm = report.max_reach_mm.max(dist_in[s]);
         }
     }
-    Some((mesh, map, report))
 }
 
 /// Times [`peel`] puts back the marked faces at a pinch and tries again.
