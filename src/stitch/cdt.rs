@@ -282,7 +282,7 @@ fn refine(
 
 /// Where a band point came from: its plane position and the index of the interior input point it
 /// is (`None`: a chord split).
-type PointOrigin = ([f64; 2], Option<u32>);
+pub(super) type PointOrigin = ([f64; 2], Option<u32>);
 
 /// The triangles between the two loop polygons (counter-clockwise in the plane).
 fn band_faces_ordered(

@@ -54,42 +54,104 @@ pub(super) fn chart_band(
         (&lo_s, &lo_d),
         opts.tangent_scale,
     );
-    let period = lift.period();
-    let unwrap = |pts: &[DVec3], what: &str| -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
-        let mut out: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
-        let mut off = Vec::with_capacity(pts.len());
-        for &p in pts {
-            let (mut c, r) = lift.chart(p);
-            if let Some(prev) = out.last() {
-                c[0] = prev[0] + wrap(c[0] - prev[0], period);
-            }
-            out.push(c);
-            off.push(r);
-        }
-        let (first, last) = (out[0][0], out[out.len() - 1][0]);
-        let total = last + wrap(first - last, period) - first;
-        if (total - period).abs() > 1e-6 * period {
-            return Err(Error::InvalidArgument(format!(
-                "{what} loop runs {:.2} times around the chart",
-                total / period
-            )));
-        }
-        Ok((out, off))
-    };
-    let (up_c, up_r) = unwrap(o.up_pts, "margin")?;
-    let (lo_c, lo_r) = unwrap(o.lo_pts, "cut")?;
+    let (up_c, up_r) = chart_loop(&lift, o.up_pts, "margin")?;
+    let (lo_c, lo_r) = chart_loop(&lift, o.lo_pts, "cut")?;
     let so = SampleOptions {
         e_upper: mean_edge(o.up_pts),
         e_lower: mean_edge(o.lo_pts),
         radius: 0.8,
         clearance: 0.5,
     };
-    // First the loops as they chart; if a loop folds back over itself there, again with its
-    // chart positions made monotone along the loop (least-squares, pool adjacent violators) and
-    // the margin kept above the cut (a clipped, jagged margin or a deep notch can do both).
+    let t = triangulate(loops, o, &so, lift.period(), up_c, lo_c)?;
+    let n = Numbering {
+        nu: loops.upper.len(),
+        nl: loops.lower.len(),
+        ni: t.band.points.len(),
+    };
+    let (chart, fixed, offset) = chart_positions(&n, o, &t, &up_r, &lo_r, lift.period());
+    let mut band = t.band;
+    let tris: Vec<[u32; 3]> = band
+        .triangles
+        .iter()
+        .map(|tri| tri.map(|b| n.id(b)))
+        .collect();
+    // Lift: Hermite profile + harmonic correction to the real loop vertices.
+    let mut values: Vec<f64> = (0..n.len())
+        .map(|i| {
+            if fixed[i] {
+                offset[i] - lift.profile_offset(chart[i])
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    harmonic(&chart, lift.period(), &tris, &fixed, &mut values);
+    let first = n.nu + n.nl;
+    for i in 0..n.ni {
+        if !fixed[first + i] {
+            let c = chart[first + i];
+            band.points[i] = lift.point(c, lift.profile_offset(c) + values[first + i]);
+        }
+    }
+    let folded = folded_faces(&band, loops, &tris, &chart, &lift);
+    Ok(ChartBand { band, folded })
+}
+
+/// The chart positions of a loop's points (unwrapped to run once around, `x` increasing by
+/// the period) and their offsets from the reference surface; an error names the loop (`what`)
+/// when it does not run once around the chart.
+fn chart_loop(lift: &Lift, pts: &[DVec3], what: &str) -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
+    let period = lift.period();
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
+    let mut off = Vec::with_capacity(pts.len());
+    for &p in pts {
+        let (mut c, r) = lift.chart(p);
+        if let Some(prev) = out.last() {
+            c[0] = prev[0] + wrap(c[0] - prev[0], period);
+        }
+        out.push(c);
+        off.push(r);
+    }
+    let (first, last) = (out[0][0], out[out.len() - 1][0]);
+    let total = last + wrap(first - last, period) - first;
+    if (total - period).abs() > 1e-6 * period {
+        return Err(Error::InvalidArgument(format!(
+            "{what} loop runs {:.2} times around the chart",
+            total / period
+        )));
+    }
+    Ok((out, off))
+}
+
+/// The band triangulated in the annulus plane, with the chart loops it was made from.
+struct Triangulated {
+    band: Band,
+    /// Per band point: its plane position and the index of its sample point (`None` for a
+    /// chord split).
+    origin: Vec<super::cdt::PointOrigin>,
+    /// The sample points (chart coordinates).
+    inner: Vec<[f64; 2]>,
+    /// The chart loops as triangulated (made monotone where the first try folded).
+    up_c: Vec<[f64; 2]>,
+    lo_c: Vec<[f64; 2]>,
+    /// The chart height mapped to the plane's unit circle.
+    y0: f64,
+}
+
+/// Samples and triangulates the band between the chart loops `up_c` and `lo_c`: first the
+/// loops as they chart; if a loop folds back over itself there, again with its chart
+/// positions made monotone along the loop (least-squares, pool adjacent violators) and the
+/// margin kept above the cut (a clipped, jagged margin or a deep notch can do both).
+fn triangulate(
+    loops: &BandLoops,
+    o: &OrderedLoops,
+    so: &SampleOptions,
+    period: f64,
+    mut up_c: Vec<[f64; 2]>,
+    mut lo_c: Vec<[f64; 2]>,
+) -> Result<Triangulated> {
     let mut attempt = 0;
-    let (mut up_c, mut lo_c) = (up_c, lo_c);
-    let (inner, y0, (mut band, origin)) = loop {
+    loop {
         let y0 = lo_c.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min);
         let plane = |c: [f64; 2]| {
             let r = (TAU * (c[1] - y0) / period).exp();
@@ -100,7 +162,7 @@ pub(super) fn chart_band(
         let lo_xy: Vec<[f64; 2]> = lo_c.iter().map(|&c| plane(c)).collect();
         // The loops first: where they do not bound an annulus, no point is sampled.
         let filled = loop_cdt(&up_xy, &lo_xy, o.uo, o.lo).and_then(|lc| {
-            let inner = sample(&up_c, &lo_c, period, &so);
+            let inner = sample(&up_c, &lo_c, period, so);
             let interior: Vec<([f64; 2], DVec3, f64)> = inner
                 .iter()
                 .map(|&c| (plane(c), DVec3::ZERO, 0.0))
@@ -108,7 +170,16 @@ pub(super) fn chart_band(
             Ok((inner, lc.fill(&interior, loops, REFINE_DEG)?))
         });
         match filled {
-            Ok((inner, t)) => break (inner, y0, t),
+            Ok((inner, (band, origin))) => {
+                return Ok(Triangulated {
+                    band,
+                    origin,
+                    inner,
+                    up_c,
+                    lo_c,
+                    y0,
+                });
+            }
             Err(e) if attempt > 0 => return Err(e),
             Err(_) => {
                 attempt += 1;
@@ -117,62 +188,67 @@ pub(super) fn chart_band(
                 separate_loops(&mut up_c, &lo_c, period, 0.5 * so.e_upper.min(so.e_lower));
             }
         }
-    };
-    // Lift: Hermite profile + harmonic correction to the real loop vertices.
-    let (nu, nl) = (loops.upper.len(), loops.lower.len());
-    let ni = band.points.len();
-    let n = nu + nl + ni;
-    let mut chart = vec![[0.0; 2]; n];
-    let mut fixed = vec![true; n];
-    let mut offset = vec![0.0; n];
+    }
+}
+
+/// Band vertex numbering of the lift: the upper loop's `nu` vertices, the lower loop's `nl`,
+/// then the `ni` interior points.
+struct Numbering {
+    nu: usize,
+    nl: usize,
+    ni: usize,
+}
+
+impl Numbering {
+    fn len(&self) -> usize {
+        self.nu + self.nl + self.ni
+    }
+
+    fn id(&self, b: BandVertex) -> u32 {
+        match b {
+            BandVertex::Upper(i) => i,
+            BandVertex::Lower(i) => self.nu as u32 + i,
+            BandVertex::Interior(i) => (self.nu + self.nl) as u32 + i,
+        }
+    }
+}
+
+/// Per band vertex (numbered by `n`): its chart position, whether it is fixed (a loop vertex)
+/// and its offset from the reference surface (loop vertices only).
+fn chart_positions(
+    n: &Numbering,
+    o: &OrderedLoops,
+    t: &Triangulated,
+    up_r: &[f64],
+    lo_r: &[f64],
+    period: f64,
+) -> (Vec<[f64; 2]>, Vec<bool>, Vec<f64>) {
+    let (nu, nl) = (n.nu, n.nl);
+    let mut chart = vec![[0.0; 2]; n.len()];
+    let mut fixed = vec![true; n.len()];
+    let mut offset = vec![0.0; n.len()];
     for (k, &i) in o.uo.iter().enumerate() {
-        chart[i as usize] = up_c[k];
+        chart[i as usize] = t.up_c[k];
         offset[i as usize] = up_r[k];
     }
     for (k, &i) in o.lo.iter().enumerate() {
-        chart[nu + i as usize] = lo_c[k];
+        chart[nu + i as usize] = t.lo_c[k];
         offset[nu + i as usize] = lo_r[k];
     }
-    for i in 0..ni {
-        match origin[i].1 {
-            Some(k) => {
-                chart[nu + nl + i] = inner[k as usize];
-                fixed[nu + nl + i] = false;
-            }
+    for i in 0..n.ni {
+        fixed[nu + nl + i] = false;
+        chart[nu + nl + i] = match t.origin[i].1 {
+            Some(k) => t.inner[k as usize],
             None => {
                 // A chord split: a free point at its plane position.
-                let xy = origin[i].0;
+                let xy = t.origin[i].0;
                 let x = xy[1].atan2(xy[0]).rem_euclid(TAU) / TAU * period;
-                let y = y0 + (xy[0].hypot(xy[1])).ln() * period / TAU;
-                chart[nu + nl + i] = [x, y];
-                fixed[nu + nl + i] = false;
+                let y = t.y0 + (xy[0].hypot(xy[1])).ln() * period / TAU;
+                [x, y]
             }
-        }
+        };
     }
-    let mut values: Vec<f64> = (0..n)
-        .map(|i| {
-            if fixed[i] {
-                offset[i] - lift.profile_offset(chart[i])
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let id = |b: BandVertex| match b {
-        BandVertex::Upper(i) => i,
-        BandVertex::Lower(i) => nu as u32 + i,
-        BandVertex::Interior(i) => (nu + nl) as u32 + i,
-    };
-    let tris: Vec<[u32; 3]> = band.triangles.iter().map(|t| t.map(id)).collect();
-    harmonic(&chart, period, &tris, &fixed, &mut values);
-    for i in 0..ni {
-        if !fixed[nu + nl + i] {
-            let c = chart[nu + nl + i];
-            band.points[i] = lift.point(c, lift.profile_offset(c) + values[nu + nl + i]);
-        }
-    }
-    let folded = folded_faces(&band, loops, &tris, &chart, &lift);
-    Ok(ChartBand { band, folded })
+    (chart, fixed, offset)
 }
 
 /// Band faces whose lifted normal points to the other side of the reference curve than most
