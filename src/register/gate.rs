@@ -315,15 +315,19 @@ fn quick_fit(teeth: &[Pairing], stop: Stop) -> Option<QuickFit> {
             .zip(&dst)
             .map(|(t, &d)| {
                 // The CBCT vertices within 2 mm of the mapped crown, summed in index order.
-                let mut near: Vec<usize> = t
-                    .ios
-                    .iter()
-                    .flat_map(|p| t.cbct.vertices_within(init.apply(*p), 4.0))
-                    .collect();
-                near.sort_unstable();
-                near.dedup();
                 let positions = &t.cbct.mesh().positions;
-                let near: Vec<DVec3> = near.iter().map(|&v| positions[v]).collect();
+                let mut is_near = vec![false; positions.len()];
+                for p in &t.ios {
+                    for v in t.cbct.vertices_within(init.apply(*p), 4.0) {
+                        is_near[v] = true;
+                    }
+                }
+                let near: Vec<DVec3> = positions
+                    .iter()
+                    .zip(&is_near)
+                    .filter(|(_, n)| **n)
+                    .map(|(p, _)| *p)
+                    .collect();
                 if near.is_empty() { d } else { mean(&near) }
             })
             .collect();
