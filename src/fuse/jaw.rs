@@ -99,10 +99,8 @@ pub fn cut_jaw(
         };
         work.push((fdi, crown, tooth, t));
     }
-    // The largest teeth first (cost grows with their vertices).
-    let results = crate::par::map_ordered_by_cost(
+    let results = crate::par::map_ordered(
         &work,
-        |&(_, crown, tooth, _)| crown.positions.len() + tooth.positions.len(),
         |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
             (
                 fdi,
@@ -144,13 +142,7 @@ pub fn cut_jaw(
 /// failures are carried over; a tooth whose stitching fails joins them. `opts.cut` is not used.
 pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
     let work: Vec<&CutTooth> = cut.teeth.values().collect();
-    // The largest crowns first (the band grows with the crown's margin, the trims with its
-    // faces).
-    let results = crate::par::map_ordered_by_cost(
-        &work,
-        |c| c.crown.positions.len(),
-        |c| (c.fdi(), stitch_tooth(c, opts)),
-    );
+    let results = crate::par::map_ordered(&work, |c| (c.fdi(), stitch_tooth(c, opts)));
     let mut jaw = FusedJaw {
         ios_only: cut.ios_only.clone(),
         cbct_only: cut.cbct_only.clone(),
