@@ -85,9 +85,19 @@ pub fn cut_crown(
     })?;
     let adj = region::face_adjacency_of(cbct, &topo)?;
     drop(topo);
-    let nf = cbct.triangles.len();
     let h: Vec<f64> = cbct.positions.iter().map(|&p| frame.height(p)).collect();
-    // Seeds: the face with the lowest highest corner (apex) and the highest lowest corner (top).
+    let (root_seed, crown_seed) = seeds(cbct, &h)?;
+    let rough: Vec<bool> = match opts.method {
+        CutMethod::LevelSet => below_level(cbct, &h, margin, frame, opts),
+        CutMethod::Dijkstra => root_side_of_path(cbct, &adj, margin, frame, opts, root_seed)?,
+    };
+    let root_mask = region::clean_root_region(cbct, &adj, rough, root_seed, crown_seed)?;
+    root_of(cbct, &root_mask)
+}
+
+/// The seed faces of the root and crown sides: the face with the lowest highest corner (apex)
+/// and the face with the highest lowest corner (top), by the heights `h` along the axis.
+fn seeds(cbct: &TriMesh, h: &[f64]) -> Result<(u32, u32)> {
     let key = |f: usize, hi: bool| {
         let t = cbct.triangles[f];
         let v = t.map(|i| h[i as usize]);
@@ -97,6 +107,7 @@ pub fn cut_crown(
             v[0].min(v[1]).min(v[2])
         }
     };
+    let nf = cbct.triangles.len();
     let root_seed = (0..nf)
         .min_by(|&a, &b| key(a, true).total_cmp(&key(b, true)))
         .ok_or_else(|| Error::InvalidArgument("CBCT tooth has no faces".into()))?
@@ -104,52 +115,75 @@ pub fn cut_crown(
     let crown_seed = (0..nf)
         .max_by(|&a, &b| key(a, false).total_cmp(&key(b, false)))
         .unwrap_or(0) as u32;
-    let rough: Vec<bool> = match opts.method {
-        CutMethod::LevelSet => {
-            let mh = MarginHeight::new(frame, margin, opts.window);
-            let below: Vec<bool> = cbct
-                .positions
-                .iter()
-                .enumerate()
-                .map(|(i, &p)| h[i] < mh.at(frame.angle(p)) - opts.offset)
-                .collect();
-            cbct.triangles
-                .iter()
-                .map(|t| t.iter().all(|&v| below[v as usize]))
-                .collect()
-        }
-        CutMethod::Dijkstra => {
-            let targets: Vec<DVec3> = margin
-                .iter()
-                .map(|&p| p - frame.axis * opts.offset)
-                .collect();
-            let anchors = dijkstra::nearest_vertices(cbct, &targets);
-            if anchors.len() < 3 {
-                return Err(Error::InvalidArgument(
-                    "margin maps to fewer than 3 distinct CBCT vertices".into(),
-                ));
-            }
-            let nb = dijkstra::vertex_neighbours(cbct);
-            let path = dijkstra::closed_path(cbct, &nb, &anchors).ok_or_else(|| {
-                Error::InvalidArgument("CBCT tooth mesh graph is not connected".into())
-            })?;
-            let mut cut_edges: Vec<(u32, u32)> = (0..path.len())
-                .map(|i| {
-                    let (a, b) = (path[i], path[(i + 1) % path.len()]);
-                    (a.min(b), a.max(b))
-                })
-                .collect();
-            cut_edges.sort_unstable();
-            cut_edges.dedup();
-            let all = vec![true; nf];
-            region::flood(&adj, &all, root_seed, |f, k| {
-                let t = cbct.triangles[f];
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                cut_edges.binary_search(&(a.min(b), a.max(b))).is_ok()
-            })
-        }
-    };
-    let root_mask = region::clean_root_region(cbct, &adj, rough, root_seed, crown_seed)?;
+    Ok((root_seed, crown_seed))
+}
+
+/// [`CutMethod::LevelSet`]: per face, whether every corner lies below the margin's height at
+/// its angle about the axis, less the offset.
+fn below_level(
+    cbct: &TriMesh,
+    h: &[f64],
+    margin: &[DVec3],
+    frame: &ToothFrame,
+    opts: &CutOptions,
+) -> Vec<bool> {
+    let mh = MarginHeight::new(frame, margin, opts.window);
+    let below: Vec<bool> = cbct
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| h[i] < mh.at(frame.angle(p)) - opts.offset)
+        .collect();
+    cbct.triangles
+        .iter()
+        .map(|t| t.iter().all(|&v| below[v as usize]))
+        .collect()
+}
+
+/// [`CutMethod::Dijkstra`]: per face, whether it is reached from the root seed without
+/// crossing the closed shortest path through the CBCT vertices nearest to the margin (moved
+/// down the axis by the offset).
+fn root_side_of_path(
+    cbct: &TriMesh,
+    adj: &[[u32; 3]],
+    margin: &[DVec3],
+    frame: &ToothFrame,
+    opts: &CutOptions,
+    root_seed: u32,
+) -> Result<Vec<bool>> {
+    let targets: Vec<DVec3> = margin
+        .iter()
+        .map(|&p| p - frame.axis * opts.offset)
+        .collect();
+    let anchors = dijkstra::nearest_vertices(cbct, &targets);
+    if anchors.len() < 3 {
+        return Err(Error::InvalidArgument(
+            "margin maps to fewer than 3 distinct CBCT vertices".into(),
+        ));
+    }
+    let nb = dijkstra::vertex_neighbours(cbct);
+    let path = dijkstra::closed_path(cbct, &nb, &anchors)
+        .ok_or_else(|| Error::InvalidArgument("CBCT tooth mesh graph is not connected".into()))?;
+    let mut cut_edges: Vec<(u32, u32)> = (0..path.len())
+        .map(|i| {
+            let (a, b) = (path[i], path[(i + 1) % path.len()]);
+            (a.min(b), a.max(b))
+        })
+        .collect();
+    cut_edges.sort_unstable();
+    cut_edges.dedup();
+    let all = vec![true; cbct.triangles.len()];
+    Ok(region::flood(adj, &all, root_seed, |f, k| {
+        let t = cbct.triangles[f];
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        cut_edges.binary_search(&(a.min(b), a.max(b))).is_ok()
+    }))
+}
+
+/// The root: the faces of `root_mask`, compacted, with each vertex's input index; an error
+/// unless it has exactly one boundary loop and that loop is simple.
+fn root_of(cbct: &TriMesh, root_mask: &[bool]) -> Result<RootCut> {
+    let nf = cbct.triangles.len();
     let mut root = TriMesh::new(
         cbct.positions.clone(),
         (0..nf)
