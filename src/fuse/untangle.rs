@@ -64,16 +64,8 @@ pub fn untangle_band(
     if band.is_empty() {
         return report;
     }
-    // Star of each movable vertex (band faces only: movable vertices are in no other face).
+    let star = stars(mesh, band.clone(), movable.clone());
     let nm = movable.len();
-    let mut star: Vec<Vec<u32>> = vec![Vec::new(); nm];
-    for f in band.clone() {
-        for v in mesh.triangles[f] {
-            if movable.contains(&v) {
-                star[(v - movable.start) as usize].push(f as u32);
-            }
-        }
-    }
     let scale = band_edge(mesh, band.clone());
     let saved: Vec<DVec3> = mesh.positions[movable.start as usize..movable.end as usize].to_vec();
     let mut first_pairs = Vec::new();
@@ -129,28 +121,13 @@ pub fn untangle_band(
         if verts.is_empty() {
             break;
         }
-        let mut moved = 0;
-        for v in verts {
-            let k = (v - movable.start) as usize;
-            if budget == 0 {
-                report.budget_spent = true;
-                break;
-            }
-            if improve_vertex(mesh, v, &star[k], &near, scale, &mut budget) {
-                moved += 1;
-                changed.extend_from_slice(&star[k]);
-                // Its neighbours may do better now.
-                for &f in &star[k] {
-                    for w in mesh.triangles[f as usize] {
-                        if movable.contains(&w) {
-                            stuck[(w - movable.start) as usize] = false;
-                        }
-                    }
-                }
-            } else {
-                stuck[k] = true;
-            }
+        let moved = Movers {
+            star: &star,
+            movable: movable.clone(),
+            near: &near,
+            scale,
         }
+        .run(mesh, &verts, &mut budget, &mut stuck, &mut changed);
         report.moves += moved;
         report.budget_spent |= budget == 0;
         if moved == 0 || report.budget_spent {
@@ -174,6 +151,65 @@ pub fn untangle_band(
         }
     }
     report
+}
+
+/// Star of each movable vertex (band faces only: movable vertices are in no other face), by
+/// its index in `movable`.
+fn stars(mesh: &TriMesh, band: Range<usize>, movable: Range<u32>) -> Vec<Vec<u32>> {
+    let mut star: Vec<Vec<u32>> = vec![Vec::new(); movable.len()];
+    for f in band {
+        for v in mesh.triangles[f] {
+            if movable.contains(&v) {
+                star[(v - movable.start) as usize].push(f as u32);
+            }
+        }
+    }
+    star
+}
+
+/// What one round's vertex moves need besides the mesh.
+struct Movers<'a> {
+    star: &'a [Vec<u32>],
+    movable: Range<u32>,
+    near: &'a NearFaces,
+    scale: f64,
+}
+
+impl Movers<'_> {
+    /// Tries to move each of `verts` in turn ([`improve_vertex`]) while `budget` lasts; a
+    /// vertex that moves adds its star to `changed` and frees its neighbours from `stuck`, one
+    /// that does not becomes stuck. Returns the number of moves.
+    fn run(
+        &self,
+        mesh: &mut TriMesh,
+        verts: &[u32],
+        budget: &mut usize,
+        stuck: &mut [bool],
+        changed: &mut Vec<u32>,
+    ) -> usize {
+        let mut moved = 0;
+        for &v in verts {
+            let k = (v - self.movable.start) as usize;
+            if *budget == 0 {
+                break;
+            }
+            if improve_vertex(mesh, v, &self.star[k], self.near, self.scale, budget) {
+                moved += 1;
+                changed.extend_from_slice(&self.star[k]);
+                // Its neighbours may do better now.
+                for &f in &self.star[k] {
+                    for w in mesh.triangles[f as usize] {
+                        if self.movable.contains(&w) {
+                            stuck[(w - self.movable.start) as usize] = false;
+                        }
+                    }
+                }
+            } else {
+                stuck[k] = true;
+            }
+        }
+        moved
+    }
 }
 
 fn band_edge(mesh: &TriMesh, band: Range<usize>) -> f64 {
