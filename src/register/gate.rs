@@ -241,22 +241,21 @@ fn icp(
     let mut medians = Vec::with_capacity(iterations);
     for _ in 0..iterations {
         let center = ios_to_cbct.apply(c0);
-        let per_tooth = crate::par::map_ordered(teeth, |t| {
-            t.ios
-                .iter()
-                .map(|p| {
-                    let q = ios_to_cbct.apply(*p);
-                    let c = t.cbct.closest_vertex(q);
-                    Pair {
-                        p: q,
-                        q: c.point,
-                        n: c.normal,
-                        n_other: DVec3::ZERO,
-                    }
-                })
-                .collect::<Vec<_>>()
-        });
-        let pairs = per_tooth.concat();
+        // One thread: the hypotheses' fits run side by side ([`assess`]).
+        let pairs: Vec<Pair> = teeth
+            .iter()
+            .flat_map(|t| t.ios.iter().map(move |p| (t, p)))
+            .map(|(t, p)| {
+                let q = ios_to_cbct.apply(*p);
+                let c = t.cbct.closest_vertex(q);
+                Pair {
+                    p: q,
+                    q: c.point,
+                    n: c.normal,
+                    n_other: DVec3::ZERO,
+                }
+            })
+            .collect();
         let med = median(pairs.iter().map(|p| p.p.distance(p.q)).collect());
         if stop == Stop::Stalled
             && medians.len() >= STALL_WINDOW
@@ -376,20 +375,6 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
         })
         .collect();
     let mut report = GateReport::default();
-    let Some(QuickFit {
-        pose: t,
-        offset,
-        fit,
-    }) = quick_fit(&given, Stop::Converged)
-    else {
-        return Verdict {
-            report,
-            jaw: None,
-            skip: Vec::new(),
-        };
-    };
-    report.fit_mm = fit;
-    report.surface_offset_mm = -offset;
     let mirrored: Vec<Pairing> = given
         .iter()
         .map(|p| Pairing {
@@ -403,25 +388,60 @@ pub(crate) fn assess(teeth: &BTreeMap<u8, ToothData>) -> Verdict {
                 .collect(),
         })
         .collect();
-    report.mirrored_fit_mm = quick_fit(&mirrored, Stop::Stalled).map_or(f64::INFINITY, |r| r.fit);
-    let mut shifted_best = (f64::INFINITY, 0);
-    for step in [-1, 1] {
-        let moved: Vec<Pairing> = given
-            .iter()
-            .filter_map(|p| {
-                let to = along_arch(p.fdi, step).filter(|&f| is_valid_fdi(f as i32))?;
-                Some(Pairing {
-                    fdi: to,
-                    cbct: &teeth.get(&to)?.cbct,
-                    ios: p.ios.iter().step_by(ALT_STRIDE).copied().collect(),
+    let shifted: Vec<(i32, Vec<Pairing>)> = [-1, 1]
+        .into_iter()
+        .map(|step| {
+            let moved = given
+                .iter()
+                .filter_map(|p| {
+                    let to = along_arch(p.fdi, step).filter(|&f| is_valid_fdi(f as i32))?;
+                    Some(Pairing {
+                        fdi: to,
+                        cbct: &teeth.get(&to)?.cbct,
+                        ios: p.ios.iter().step_by(ALT_STRIDE).copied().collect(),
+                    })
                 })
-            })
-            .collect();
-        if moved.len() >= 3
-            && let Some(q) = quick_fit(&moved, Stop::Stalled)
+                .collect();
+            (step, moved)
+        })
+        .collect();
+    // The hypotheses are independent: their fits run side by side, each on one thread. Each
+    // with its stop rule and the fewest teeth it is fitted with (a shift along the arch keeps
+    // at least 3).
+    let mut hypotheses: Vec<(&[Pairing], Stop, usize)> =
+        vec![(&given, Stop::Converged, 0), (&mirrored, Stop::Stalled, 0)];
+    hypotheses.extend(
+        shifted
+            .iter()
+            .map(|(_, moved)| (moved.as_slice(), Stop::Stalled, 3)),
+    );
+    let mut fits = crate::par::map_ordered(&hypotheses, |&(teeth, stop, fewest)| {
+        (teeth.len() >= fewest)
+            .then(|| quick_fit(teeth, stop))
+            .flatten()
+    })
+    .into_iter();
+    let Some(QuickFit {
+        pose: t,
+        offset,
+        fit,
+    }) = fits.next().flatten()
+    else {
+        return Verdict {
+            report,
+            jaw: None,
+            skip: Vec::new(),
+        };
+    };
+    report.fit_mm = fit;
+    report.surface_offset_mm = -offset;
+    report.mirrored_fit_mm = fits.next().flatten().map_or(f64::INFINITY, |r| r.fit);
+    let mut shifted_best = (f64::INFINITY, 0);
+    for ((step, _), q) in shifted.iter().zip(fits) {
+        if let Some(q) = q
             && q.fit < shifted_best.0
         {
-            shifted_best = (q.fit, step);
+            shifted_best = (q.fit, *step);
         }
     }
     report.shifted_fit_mm = shifted_best.0;
