@@ -10,6 +10,7 @@ mod labels;
 mod numbering;
 mod obj;
 mod ply;
+mod ply_binary;
 mod stl;
 mod teeth;
 pub mod volume;

@@ -4,17 +4,20 @@
 //! (a given name, or else a known label name: see [`super::labels`]; any numeric type); `face`
 //! element with `vertex_indices` or `vertex_index` (a list of any integer type,
 //! fan-triangulated) and an optional face label of the same name.
-//! Read through `ply-rs-bw` with typed elements (no per-vertex maps). Write: `x, y, z` as
+//! The header and ASCII payloads are read through `ply-rs-bw` with typed elements (no
+//! per-vertex maps), binary payloads in bulk ([`super::ply_binary`]). Write: `x, y, z` as
 //! double (lossless) plus `int` vertex properties.
 
 use super::labels::{ArrayInfo, MeshFile, choose};
+use super::ply_binary::{self, Cursor, Faces};
 use super::{FaceBuilder, PlyEncoding, check_finite, check_vertex_count, label_from_f64};
 use crate::mesh::{LabeledMesh, TriMesh};
 use crate::{Error, Result};
 use glam::DVec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
-    DefaultElement, ElementDef, Property, PropertyAccess, PropertyAccessResult, PropertyType,
+    DefaultElement, ElementDef, Encoding, Property, PropertyAccess, PropertyAccessResult,
+    PropertyType,
 };
 use std::cell::RefCell;
 use std::io::Write;
@@ -48,9 +51,9 @@ fn is_label_key(key: &str) -> bool {
 
 /// A `vertex` element as parsed: coordinates and the label property's value.
 #[derive(Default)]
-struct PlyVertex {
-    xyz: [Option<f64>; 3],
-    label: Option<f64>,
+pub(super) struct PlyVertex {
+    pub(super) xyz: [Option<f64>; 3],
+    pub(super) label: Option<f64>,
 }
 
 impl PropertyAccess for PlyVertex {
@@ -106,6 +109,17 @@ pub fn read_ply_bytes_with(
     bytes: &[u8],
     label_array: Option<&str>,
 ) -> Result<MeshFile> {
+    read_ply(file, bytes, label_array, true)
+}
+
+/// [`read_ply_bytes_with`]; `bulk`: a binary payload read by [`super::ply_binary`] (else by
+/// the crate's reader, as an ASCII one always is).
+pub(super) fn read_ply(
+    file: &str,
+    bytes: &[u8],
+    label_array: Option<&str>,
+    bulk: bool,
+) -> Result<MeshFile> {
     let err = |m: String| Error::Io(format!("{file}: {m}"));
     let perr = |e: ply_rs_bw::parser::ParseError| Error::Io(format!("{file}: malformed PLY: {e}"));
     let mut rd = Reader::new(bytes);
@@ -133,11 +147,18 @@ pub fn read_ply_bytes_with(
             .is_some_and(|c| arrays.iter().any(|a| a.name == c) && def.properties.contains_key(c))
     };
     let has_vlabel = has_label(vdef);
-    let _key = LabelKey::set(chosen.clone());
-    let mut verts: Vec<PlyVertex> = Vec::new();
-    let mut faces: Vec<PlyFace> = Vec::new();
-    let mut face_key = None;
-    let mut has_flabel = false;
+    let face_key = header.elements.get("face").map(|def| {
+        ["vertex_indices", "vertex_index"]
+            .into_iter()
+            .find(|k| def.properties.contains_key(*k))
+    });
+    if face_key == Some(None) {
+        return Err(err(
+            "face element has neither `vertex_indices` nor `vertex_index`".into(),
+        ));
+    }
+    let face_key = face_key.flatten();
+    let has_flabel = header.elements.get("face").is_some_and(has_label);
     // An item of an element without properties takes no bytes: reading a declared count of them
     // would loop that many times over nothing (a damaged header can declare 10^16).
     if let Some((name, def)) = header
@@ -150,35 +171,13 @@ pub fn read_ply_bytes_with(
             def.count
         )));
     }
-    // Elements are stored in file order; each is read with its own element type.
-    for (name, def) in &header.elements {
-        match name.as_str() {
-            "vertex" => {
-                verts = Parser::<PlyVertex>::new()
-                    .read_payload_for_element(&mut rd, def, &header)
-                    .map_err(perr)?;
-            }
-            "face" => {
-                face_key = ["vertex_indices", "vertex_index"]
-                    .into_iter()
-                    .find(|k| def.properties.contains_key(*k));
-                if face_key.is_none() {
-                    return Err(err(
-                        "face element has neither `vertex_indices` nor `vertex_index`".into(),
-                    ));
-                }
-                has_flabel = has_label(def);
-                faces = Parser::<PlyFace>::new()
-                    .read_payload_for_element(&mut rd, def, &header)
-                    .map_err(perr)?;
-            }
-            _ => {
-                Parser::<Skip>::new()
-                    .read_payload_for_element(&mut rd, def, &header)
-                    .map_err(perr)?;
-            }
-        }
-    }
+    let (verts, faces) = if bulk && header.encoding != Encoding::Ascii {
+        let big = header.encoding == Encoding::BinaryBigEndian;
+        read_binary(rd.get_ref(), &header, big, chosen.as_deref(), face_key)
+            .map_err(|e| err(format!("malformed PLY: {e}")))?
+    } else {
+        read_with_crate(&mut rd, &header, chosen.as_deref()).map_err(perr)?
+    };
     check_vertex_count(file, verts.len())?;
     let mut positions = Vec::with_capacity(verts.len());
     let mut vlabels = has_vlabel.then(|| Vec::with_capacity(verts.len()));
@@ -196,16 +195,14 @@ pub fn read_ply_bytes_with(
 
     let mut fb = FaceBuilder::new(file, positions.len());
     let mut plabels = Vec::new();
-    let mut idx = Vec::new();
     let key = face_key.unwrap_or("vertex_indices");
-    for (f, e) in faces.iter().enumerate() {
-        idx.clear();
-        if !list_i64(e.idx.as_ref(), &mut idx) {
+    for f in 0..faces.len() {
+        if faces.not_integers == Some(f) {
             return Err(err(format!("face {f}: `{key}` is not a list of integers")));
         }
-        fb.polygon(&idx)?;
+        fb.polygon(faces.indices(f))?;
         if has_flabel {
-            let l = e.label.unwrap_or(f64::NAN);
+            let l = faces.label[f].unwrap_or(f64::NAN);
             plabels.push(label_from_f64(l, file, "face", f)?);
         }
     }
@@ -238,6 +235,61 @@ impl PropertyAccess for Skip {
     fn set_property(&mut self, _: &str, _: Property) -> PropertyAccessResult {
         PropertyAccessResult::Set
     }
+}
+
+/// The payload's `vertex` and `face` elements read by the crate's reader (each element with its
+/// own type; the others read and dropped).
+fn read_with_crate(
+    rd: &mut Reader<&[u8]>,
+    header: &ply_rs_bw::ply::Header,
+    label: Option<&str>,
+) -> std::result::Result<(Vec<PlyVertex>, Faces), ply_rs_bw::parser::ParseError> {
+    let _key = LabelKey::set(label.map(str::to_owned));
+    let mut verts = Vec::new();
+    let mut faces = Faces::with_capacity(0);
+    for (name, def) in &header.elements {
+        match name.as_str() {
+            "vertex" => {
+                verts = Parser::<PlyVertex>::new().read_payload_for_element(rd, def, header)?;
+            }
+            "face" => {
+                let read = Parser::<PlyFace>::new().read_payload_for_element(rd, def, header)?;
+                faces = Faces::with_capacity(read.len());
+                for (f, e) in read.iter().enumerate() {
+                    if !list_i64(e.idx.as_ref(), &mut faces.idx) {
+                        faces.not_integers.get_or_insert(f);
+                    }
+                    faces.start.push(faces.idx.len());
+                    faces.label.push(e.label);
+                }
+            }
+            _ => {
+                Parser::<Skip>::new().read_payload_for_element(rd, def, header)?;
+            }
+        }
+    }
+    Ok((verts, faces))
+}
+
+/// The binary payload `payload` (after the header) read in bulk ([`super::ply_binary`]).
+fn read_binary(
+    payload: &[u8],
+    header: &ply_rs_bw::ply::Header,
+    big: bool,
+    label: Option<&str>,
+    face_key: Option<&str>,
+) -> std::result::Result<(Vec<PlyVertex>, Faces), String> {
+    let mut c = Cursor::new(payload, big);
+    let mut verts = Vec::new();
+    let mut faces = Faces::with_capacity(0);
+    for (name, def) in &header.elements {
+        match (name.as_str(), face_key) {
+            ("vertex", _) => verts = ply_binary::vertices(&mut c, def, label)?,
+            ("face", Some(key)) => faces = ply_binary::faces(&mut c, def, key, label)?,
+            _ => ply_binary::skip(&mut c, def)?,
+        }
+    }
+    Ok((verts, faces))
 }
 
 /// The scalar properties of an element other than `x, y, z` (label candidates).
