@@ -3,7 +3,7 @@
 //! margin) its first rows can cross crown faces, and where the lift stretches the chart a face can
 //! keep an angle under the target. Here each free band vertex of such a face is moved within its
 //! star to the best of a few candidate positions, every candidate checked exactly
-//! ([`triangles_intersect`]) against the faces around it: a move is kept only if its star crosses
+//! ([`triangles_intersect`](crate::mesh_check::triangles_intersect)) against the faces around it: a move is kept only if its star crosses
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
 //! vertices (IOS margin, CBCT cut) never move. The exact tests that score candidates are
 //! budgeted ([`TESTS_PER_BAND_FACE`] per band face): on a band that cannot be untangled the
