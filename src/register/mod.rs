@@ -373,23 +373,7 @@ pub fn register(
         crate::arch::check_fdi(*f as i32)?;
     }
     crate::units::check_jaw_scales(ios, cbct)?;
-    let mut all_fdi: Vec<u8> = ios.keys().chain(cbct.keys()).copied().collect();
-    all_fdi.sort_unstable();
-    all_fdi.dedup();
-    let mut both = Vec::new();
-    for f in all_fdi {
-        match (ios.get(&f), cbct.get(&f)) {
-            (Some(i), Some(c)) => both.push((f, i, c)),
-            (Some(_), None) => skipped.push(Skipped {
-                fdi: f,
-                reason: "present in the IOS only (no CBCT tooth): nothing to register it to".into(),
-            }),
-            (None, _) => skipped.push(Skipped {
-                fdi: f,
-                reason: "present in the CBCT only (no IOS crown): no crown to register".into(),
-            }),
-        }
-    }
+    let both = paired(ios, cbct, &mut skipped);
     if both.is_empty()
         && let Some(e) = gate::wrong_jaw(
             &ios.keys().copied().collect::<Vec<_>>(),
@@ -419,33 +403,12 @@ pub fn register(
 
     // Stage 2: coarse registration, eq. (2).
     let t2 = Instant::now();
-    let (coarse_t, offset, coarse_stats) = match &opts.coarse {
-        Some(o) => {
-            let r = match opts.coarse_restart_fit_mm {
-                Some(bad) => coarse::coarse_with_restarts(&teeth, initial, o, bad),
-                None => coarse::coarse(&teeth, initial, o),
-            };
-            (r.transform, r.offset, Some(r.stats))
-        }
-        None => (initial, 0.0, None),
-    };
+    let (coarse_t, offset, coarse_stats) = coarse_stage(&teeth, initial, opts);
     timing.coarse_ms = ms(t2);
 
     // Stage 3: fine registration, eq. (3) or the smooth-drift model.
     let t3 = Instant::now();
-    let coarse_inv = coarse_t.inverse();
-    let (ios_to_cbct, fine_stats): (BTreeMap<u8, Rigid>, Option<BTreeMap<u8, StageStats>>) =
-        match &opts.fine {
-            FineMode::None => (order.iter().map(|&f| (f, coarse_inv)).collect(), None),
-            FineMode::Sequential(o) => {
-                let (m, s) = fine::fine_sequential(&teeth, &order, &coarse_t, offset, o);
-                (m, Some(s))
-            }
-            FineMode::SmoothDrift(o, d) => {
-                let (m, s) = drift::fine_smooth(&teeth, &order, &coarse_t, offset, o, d);
-                (m, Some(s))
-            }
-        };
+    let (ios_to_cbct, fine_stats) = fine_stage(&teeth, &order, &coarse_t, offset, opts);
     timing.fine_ms = ms(t3);
 
     // Report: SD per tooth, plausibility guard, warnings.
@@ -487,6 +450,76 @@ pub fn register(
         gate: gate_report,
         timing,
     })
+}
+
+/// The teeth in both modalities in FDI order; the others go to `skipped` with the reason.
+fn paired<'a>(
+    ios: &'a BTreeMap<u8, TriMesh>,
+    cbct: &'a BTreeMap<u8, TriMesh>,
+    skipped: &mut Vec<Skipped>,
+) -> Vec<(u8, &'a TriMesh, &'a TriMesh)> {
+    let mut all_fdi: Vec<u8> = ios.keys().chain(cbct.keys()).copied().collect();
+    all_fdi.sort_unstable();
+    all_fdi.dedup();
+    let mut both = Vec::new();
+    for f in all_fdi {
+        match (ios.get(&f), cbct.get(&f)) {
+            (Some(i), Some(c)) => both.push((f, i, c)),
+            (Some(_), None) => skipped.push(Skipped {
+                fdi: f,
+                reason: "present in the IOS only (no CBCT tooth): nothing to register it to".into(),
+            }),
+            (None, _) => skipped.push(Skipped {
+                fdi: f,
+                reason: "present in the CBCT only (no IOS crown): no crown to register".into(),
+            }),
+        }
+    }
+    both
+}
+
+/// Stage 2, eq. (2): the jaw-wide coarse transform from `initial`, the CBCT surface offset it
+/// fits and its statistics (`initial`, no offset and none without a coarse stage).
+fn coarse_stage(
+    teeth: &BTreeMap<u8, ToothData>,
+    initial: Rigid,
+    opts: &RegisterOptions,
+) -> (Rigid, f64, Option<StageStats>) {
+    match &opts.coarse {
+        Some(o) => {
+            let r = match opts.coarse_restart_fit_mm {
+                Some(bad) => coarse::coarse_with_restarts(teeth, initial, o, bad),
+                None => coarse::coarse(teeth, initial, o),
+            };
+            (r.transform, r.offset, Some(r.stats))
+        }
+        None => (initial, 0.0, None),
+    }
+}
+
+/// Stage 3: each tooth's IOS → CBCT transform by eq. (3) or the smooth-drift model (the
+/// coarse transform's inverse for every tooth without a fine stage), with the statistics.
+fn fine_stage(
+    teeth: &BTreeMap<u8, ToothData>,
+    order: &[u8],
+    coarse_t: &Rigid,
+    offset: f64,
+    opts: &RegisterOptions,
+) -> (BTreeMap<u8, Rigid>, Option<BTreeMap<u8, StageStats>>) {
+    match &opts.fine {
+        FineMode::None => {
+            let coarse_inv = coarse_t.inverse();
+            (order.iter().map(|&f| (f, coarse_inv)).collect(), None)
+        }
+        FineMode::Sequential(o) => {
+            let (m, s) = fine::fine_sequential(teeth, order, coarse_t, offset, o);
+            (m, Some(s))
+        }
+        FineMode::SmoothDrift(o, d) => {
+            let (m, s) = drift::fine_smooth(teeth, order, coarse_t, offset, o, d);
+            (m, Some(s))
+        }
+    }
 }
 
 /// Runs the registration gate on the prepared teeth (three or more): a jaw-level finding is
