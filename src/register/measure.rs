@@ -31,39 +31,7 @@ pub(super) fn tooth_result(
     opts: &RegisterOptions,
 ) -> (f64, usize, ToothRegistration) {
     let mut warnings: Vec<String> = gate_warning.cloned().into_iter().collect();
-    let mut m = ios_to_cbct;
-    let coarse_t = stages.coarse;
-    let correction = |m: &Rigid| {
-        let fine_c2i = m.inverse();
-        d.cbct
-            .mesh()
-            .positions
-            .iter()
-            .map(|p| fine_c2i.apply(*p).distance(coarse_t.apply(*p)))
-            .fold(0.0, f64::max)
-    };
-    let mut fine_correction = correction(&m);
-    if stages.fine.is_some() && fine_correction > opts.guard.max_fine_correction_mm {
-        warnings.push(format!(
-            "fine registration moved the tooth by up to {fine_correction:.3} mm, more than the \
-             plausible drift of {:.3} mm (implausible: the fit diverged or slid); {}",
-            opts.guard.max_fine_correction_mm,
-            if opts.guard.reject_implausible {
-                "kept the coarse transform instead"
-            } else {
-                "accepted as computed, check this tooth"
-            }
-        ));
-        if opts.guard.reject_implausible {
-            m = coarse_t.inverse();
-            fine_correction = 0.0;
-        }
-    } else if stages.fine.is_some() && fine_correction > opts.guard.flag_correction_mm {
-        warnings.push(format!(
-            "fine registration moved the tooth by up to {fine_correction:.3} mm relative to the \
-             jaw-wide transform: large drift or a distorted CBCT crown, check this tooth"
-        ));
-    }
+    let (m, fine_correction) = guarded(d, ios_to_cbct, stages, opts, &mut warnings);
     let dist: Vec<f64> = d
         .report
         .iter()
@@ -78,28 +46,7 @@ pub(super) fn tooth_result(
         .count() as f64
         / nd;
     let dist_sum = dist.iter().sum::<f64>();
-    if sd > opts.guard.max_sd_mm {
-        warnings.push(format!(
-            "surface distance {sd:.3} mm exceeds {:.3} mm: CBCT artefact (metal?) or misregistration",
-            opts.guard.max_sd_mm
-        ));
-    }
-    let gap = top_gap(d, &m);
-    if gap.abs() > opts.guard.max_top_gap_mm {
-        warnings.push(format!(
-            "the IOS crown top lies {:.3} mm {} the CBCT crown top: the crown may have slid \
-             along the tooth",
-            gap.abs(),
-            if gap < 0.0 { "below" } else { "above" }
-        ));
-    }
-    if inl < opts.guard.min_inlier_fraction {
-        warnings.push(format!(
-            "only {:.0}% of the IOS crown lies within {:.2} mm of the CBCT tooth",
-            inl * 100.0,
-            opts.inlier_distance_mm
-        ));
-    }
+    fit_warnings(sd, top_gap(d, &m), inl, opts, &mut warnings);
     let st = stages
         .fine
         .and_then(|s| s.get(&f).copied())
@@ -136,6 +83,76 @@ pub(super) fn tooth_result(
             warnings,
         },
     )
+}
+
+/// The fine transform `ios_to_cbct` under the plausibility guard: how far (mm) it moves the
+/// CBCT tooth from the coarse transform, a warning when that is beyond the flag or the limit,
+/// and beyond the limit (with `reject_implausible`) the coarse transform instead. Returns the
+/// transform kept and its correction.
+fn guarded(
+    d: &ToothData,
+    ios_to_cbct: Rigid,
+    stages: &Stages,
+    opts: &RegisterOptions,
+    warnings: &mut Vec<String>,
+) -> (Rigid, f64) {
+    let coarse_t = stages.coarse;
+    let fine_c2i = ios_to_cbct.inverse();
+    let fine_correction = d
+        .cbct
+        .mesh()
+        .positions
+        .iter()
+        .map(|p| fine_c2i.apply(*p).distance(coarse_t.apply(*p)))
+        .fold(0.0, f64::max);
+    if stages.fine.is_some() && fine_correction > opts.guard.max_fine_correction_mm {
+        warnings.push(format!(
+            "fine registration moved the tooth by up to {fine_correction:.3} mm, more than the \
+             plausible drift of {:.3} mm (implausible: the fit diverged or slid); {}",
+            opts.guard.max_fine_correction_mm,
+            if opts.guard.reject_implausible {
+                "kept the coarse transform instead"
+            } else {
+                "accepted as computed, check this tooth"
+            }
+        ));
+        if opts.guard.reject_implausible {
+            return (coarse_t.inverse(), 0.0);
+        }
+    } else if stages.fine.is_some() && fine_correction > opts.guard.flag_correction_mm {
+        warnings.push(format!(
+            "fine registration moved the tooth by up to {fine_correction:.3} mm relative to the \
+             jaw-wide transform: large drift or a distorted CBCT crown, check this tooth"
+        ));
+    }
+    (ios_to_cbct, fine_correction)
+}
+
+/// Warnings on the surface fit of a registered tooth: its mean surface distance `sd`, the gap
+/// `gap` between the IOS and CBCT crown tops and the inlier fraction `inl`, each against its
+/// guard.
+fn fit_warnings(sd: f64, gap: f64, inl: f64, opts: &RegisterOptions, warnings: &mut Vec<String>) {
+    if sd > opts.guard.max_sd_mm {
+        warnings.push(format!(
+            "surface distance {sd:.3} mm exceeds {:.3} mm: CBCT artefact (metal?) or misregistration",
+            opts.guard.max_sd_mm
+        ));
+    }
+    if gap.abs() > opts.guard.max_top_gap_mm {
+        warnings.push(format!(
+            "the IOS crown top lies {:.3} mm {} the CBCT crown top: the crown may have slid \
+             along the tooth",
+            gap.abs(),
+            if gap < 0.0 { "below" } else { "above" }
+        ));
+    }
+    if inl < opts.guard.min_inlier_fraction {
+        warnings.push(format!(
+            "only {:.0}% of the IOS crown lies within {:.2} mm of the CBCT tooth",
+            inl * 100.0,
+            opts.inlier_distance_mm
+        ));
+    }
 }
 
 /// Signed gap (mm) between the occlusal tops of the IOS crown (mapped by `ios_to_cbct`) and the
