@@ -84,18 +84,14 @@ impl<'a> Cursor<'a> {
         Ok(a)
     }
 
-    /// A scalar as `f64` (the crate's reader gives every scalar type's value exactly).
+    /// A scalar as `f64` (the crate's reader gives every scalar type's value exactly; the
+    /// integer types hold at most 32 bits, exact in `f64`).
     fn scalar(&mut self, t: &ScalarType) -> Result<f64, String> {
-        Ok(match t {
-            ScalarType::Char => i8::from_le_bytes(self.take()?).into(),
-            ScalarType::UChar => u8::from_le_bytes(self.take()?).into(),
-            ScalarType::Short => i16::from_le_bytes(self.take()?).into(),
-            ScalarType::UShort => u16::from_le_bytes(self.take()?).into(),
-            ScalarType::Int => i32::from_le_bytes(self.take()?).into(),
-            ScalarType::UInt => u32::from_le_bytes(self.take()?).into(),
-            ScalarType::Float => f32::from_le_bytes(self.take()?).into(),
-            ScalarType::Double => f64::from_le_bytes(self.take()?),
-        })
+        match t {
+            ScalarType::Float => Ok(f32::from_le_bytes(self.take()?).into()),
+            ScalarType::Double => Ok(f64::from_le_bytes(self.take()?)),
+            _ => Ok(self.integer(t)?.map_or(f64::NAN, |v| v as f64)),
+        }
     }
 
     /// An integer item of a list (`None` for a floating-point type, whose bytes are skipped).
