@@ -1,7 +1,8 @@
-//! The builds of a tooth from its crown with the margin's narrow slits closed
-//! ([`super::inlet`]), and the last remedy for a tooth those builds leave crossed: the fringe
-//! reaching farther than the default reach, kept only when it leaves fewer crossings (a remedy
-//! that fails to build is skipped).
+//! The first builds of a tooth: from its crown as cut, or, where the first build crosses the
+//! crown and the margin has narrow slits, from the crown with them closed ([`super::inlet`]);
+//! and the last remedy for a tooth those builds leave crossed: the fringe reaching farther than
+//! the default reach, kept only when it leaves fewer crossings (a remedy that fails to build is
+//! skipped).
 
 use super::FuseOptions;
 use super::assembly::{
