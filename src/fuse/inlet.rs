@@ -32,7 +32,7 @@ pub struct InletReport {
 }
 
 /// Closes the narrow inlets of `crown`'s margin (its single boundary loop; a crown with
-/// another number of loops is left as it is), widest first. Returns what was closed.
+/// another number of loops is left as it is), longest first. Returns what was closed.
 pub fn close_inlets(crown: &mut TriMesh) -> InletReport {
     let mut report = InletReport::default();
     for _ in 0..MAX_INLETS {
