@@ -62,6 +62,7 @@ impl CrownSide {
 }
 
 /// Crown + band + root of one attempt, with what the untangling left.
+#[derive(Clone)]
 pub(super) struct Assembled {
     /// Crown, band and root in one mesh (crown faces first, then the band's, then the root's).
     pub(super) mesh: TriMesh,
@@ -98,17 +99,9 @@ pub(super) fn cut_side(ct: &CutTooth) -> CrownSide {
     }
 }
 
-/// The builds of one tooth from the crown side `side` ([`build_attempts`], then [`polish`]):
-/// the build kept and the tooth's trim.
-pub(super) fn builds(
-    ct: &CutTooth,
-    side: CrownSide,
-    opts: &FuseOptions,
-) -> Result<(Assembled, super::fringe::FringeTrim)> {
-    builds_from(ct, side, opts, None)
-}
-
-/// [`builds`], with `first` the first build from `side` when it is already made.
+/// The builds of one tooth from the crown side `side` ([`build_attempts`], then [`polish`]),
+/// with `first` the first build from `side` when it is already made: the build kept and the
+/// tooth's trim.
 pub(super) fn builds_from(
     ct: &CutTooth,
     side: CrownSide,
@@ -195,8 +188,9 @@ fn retrim(
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
-    let (a, trimmed, start, inlets_closed) = super::remedy::first_builds(ct, opts, &mut warnings)?;
-    let (a, trimmed) = super::remedy::remedies(ct, opts, a, trimmed, &start, &mut warnings);
+    let first = super::remedy::first_builds(ct, opts, &mut warnings)?;
+    let inlets_closed = first.inlets_closed;
+    let (a, trimmed) = super::remedy::remedies(ct, opts, first, &mut warnings);
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",

@@ -6,7 +6,7 @@
 
 use super::FuseOptions;
 use super::assembly::{
-    Assembled, CrownSide, assemble, builds, builds_from, crossings_left, cut_side, trimmed_side,
+    Assembled, CrownSide, assemble, builds_from, crossings_left, cut_side, trimmed_side,
 };
 use super::fringe::FringeTrim;
 use super::tooth::CutTooth;
@@ -18,62 +18,105 @@ use crate::Result;
 /// builds leave crossed is clear after these builds, trimmed at most 0.52 mm from the margin.
 pub(super) const LAST_RESORT_REACH: &[f64] = &[2.0, 3.0];
 
-/// The builds of `ct` ([`builds`]) from its crown as cut. Where the first build leaves the band
+/// What [`first_builds`] made: the build kept, its trim, the crown side the builds started
+/// from, the number of slits closed on it, and the first build from that side when it left
+/// crossings (the remedies start from the same build: the band does not depend on the reach).
+pub(super) struct FirstBuilds {
+    pub(super) kept: Assembled,
+    pub(super) trim: FringeTrim,
+    pub(super) start: CrownSide,
+    pub(super) inlets_closed: usize,
+    start_first: Option<Assembled>,
+}
+
+/// The first build from `side`, with a copy kept when it leaves crossings (only then can the
+/// remedies need it).
+fn first_build(
+    ct: &CutTooth,
+    side: &CrownSide,
+    opts: &FuseOptions,
+) -> Result<(Assembled, Option<Assembled>)> {
+    let a = assemble(ct, side, opts)?;
+    let copy = (crossings_left(&a) > 0).then(|| a.clone());
+    Ok((a, copy))
+}
+
+/// The builds of `ct` ([`builds_from`]) from its crown as cut. Where the first build leaves the band
 /// crossing the crown and the margin has narrow slits ([`super::inlet`]; with the fringe on),
 /// the builds from the crown with those slits closed come first, since no band laid from a
 /// slit's margin can clear the crown wall below it: kept when they leave no crossing, else
 /// when they leave fewer than the builds from the crown as cut (a closed crown that fails to
-/// build is skipped). Returns the build, its trim, the crown side built on and the number of
-/// slits closed; a closure kept adds a warning.
+/// build is skipped). A closure kept adds a warning.
 pub(super) fn first_builds(
     ct: &CutTooth,
     opts: &FuseOptions,
     warnings: &mut Vec<String>,
-) -> Result<(Assembled, FringeTrim, CrownSide, usize)> {
+) -> Result<FirstBuilds> {
     let side = cut_side(ct);
-    let first = assemble(ct, &side, opts)?;
+    let (first, first_copy) = first_build(ct, &side, opts)?;
     if crossings_left(&first) > 0 && opts.fringe_reach_mm > 0.0 {
         let mut crown = ct.crown.clone();
         let r = super::inlet::close_inlets(&mut crown);
         if r.closed > 0 {
             let closed = trimmed_side(ct, crown, ct.ios_vertex.clone());
-            let from_closed = builds(ct, closed.clone(), opts).ok();
+            let from_closed = first_build(ct, &closed, opts).ok().and_then(|(f, copy)| {
+                let built = builds_from(ct, closed.clone(), opts, Some(f)).ok()?;
+                Some((built, copy))
+            });
             let from_cut = match from_closed {
-                Some((ref b, _)) if crossings_left(b) == 0 => None,
+                Some(((ref b, _), _)) if crossings_left(b) == 0 => None,
                 _ => Some(builds_from(ct, side.clone(), opts, Some(first))?),
             };
-            let use_closed = from_closed.as_ref().is_some_and(|(b, _)| {
+            let use_closed = from_closed.as_ref().is_some_and(|((b, _), _)| {
                 from_cut
                     .as_ref()
                     .is_none_or(|(a, _)| crossings_left(b) < crossings_left(a))
             });
-            if use_closed && let Some((b, t)) = from_closed {
+            if use_closed && let Some(((kept, trim), start_first)) = from_closed {
                 warnings.push(format!(
                     "{} narrow inlets of the IOS margin closed ({} faces added on the crown's own vertices; {:.2} mm of margin taken out)",
                     r.closed, r.faces, r.length_mm
                 ));
-                return Ok((b, t, closed, r.closed));
+                return Ok(FirstBuilds {
+                    kept,
+                    trim,
+                    start: closed,
+                    inlets_closed: r.closed,
+                    start_first,
+                });
             }
-            let (a, t) = from_cut.expect("built from the cut crown unless the closed one won");
-            return Ok((a, t, side, 0));
+            let (kept, trim) =
+                from_cut.expect("built from the cut crown unless the closed one won");
+            return Ok(FirstBuilds {
+                kept,
+                trim,
+                start: side,
+                inlets_closed: 0,
+                start_first: first_copy,
+            });
         }
     }
-    let (a, t) = builds_from(ct, side.clone(), opts, Some(first))?;
-    Ok((a, t, side, 0))
+    let (kept, trim) = builds_from(ct, side.clone(), opts, Some(first))?;
+    Ok(FirstBuilds {
+        kept,
+        trim,
+        start: side,
+        inlets_closed: 0,
+        start_first: first_copy,
+    })
 }
 
-/// The last remedy for build `a` (trim `trimmed`) of `ct` from the crown side `start`, while
-/// crossings are left (none with the fringe off): the builds made again with the fringe
-/// reaching farther ([`LAST_RESORT_REACH`]), each kept only when it leaves fewer crossings and
-/// then warned. Returns the build kept and its trim.
+/// The last remedy for the builds `b` of `ct`, while crossings are left (none with the fringe
+/// off): the builds made again from the same crown side and the same first build with the
+/// fringe reaching farther ([`LAST_RESORT_REACH`]), each kept only when it leaves fewer
+/// crossings and then warned. Returns the build kept and its trim.
 pub(super) fn remedies(
     ct: &CutTooth,
     opts: &FuseOptions,
-    mut a: Assembled,
-    mut trimmed: FringeTrim,
-    start: &CrownSide,
+    b: FirstBuilds,
     warnings: &mut Vec<String>,
 ) -> (Assembled, FringeTrim) {
+    let (mut a, mut trimmed) = (b.kept, b.trim);
     if opts.fringe_reach_mm <= 0.0 {
         return (a, trimmed);
     }
@@ -86,14 +129,14 @@ pub(super) fn remedies(
             ..*opts
         };
         // A remedy that fails to build is skipped: the tooth keeps the build it has.
-        if let Ok((b, t)) = builds(ct, start.clone(), &wide)
-            && crossings_left(&b) < crossings_left(&a)
+        if let Ok((w, t)) = builds_from(ct, b.start.clone(), &wide, b.start_first.clone())
+            && crossings_left(&w) < crossings_left(&a)
         {
             warnings.push(format!(
                 "the band crossed the crown within {:.2} mm of the margin: built again with the fringe reaching {:.2} mm, IOS vertices trimmed up to {:.2} mm from it",
                 opts.fringe_reach_mm, wide.fringe_reach_mm, t.max_reach_mm
             ));
-            (a, trimmed) = (b, t);
+            (a, trimmed) = (w, t);
         }
     }
     (a, trimmed)
