@@ -370,3 +370,44 @@ fn coarse_export_slits_closed_and_reported() {
     }
     assert_eq!(closed, [13, 15, 22], "teeth whose slits were closed");
 }
+
+/// A coarse lower jaw fused from the command line with its registration, where trimming the
+/// crown faces the first band crossed (at a notch of the lateral incisor 42's margin) leaves a
+/// band that folds over itself and crosses no crown face: the band is built again on that crown
+/// with other tangent lengths, and every tooth ends with no crossing the fusion added.
+#[test]
+fn coarse_lower_jaw_self_folded_band_reshaped() {
+    let d = tmp("coarse_lower_reshaped");
+    let demo = d.join("demo");
+    ok(&[
+        "demo",
+        "--seed",
+        "16",
+        "--jaw",
+        "lower",
+        "--ios-export",
+        "coarse",
+        "--out",
+        s(&demo),
+    ]);
+    let out = d.join("fused");
+    ok(&[
+        "fuse",
+        "--ios",
+        s(&demo.join("ios.ply")),
+        "--cbct",
+        s(&demo.join("cbct.ply")),
+        "--out",
+        s(&out),
+    ]);
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let teeth = r["teeth"].as_array().unwrap();
+    assert_eq!(teeth.len(), 14, "{r}");
+    for t in teeth {
+        let fdi = t["fdi"].as_u64().unwrap();
+        assert_eq!(t["watertight"], true, "tooth {fdi}");
+        assert_eq!(t["quality"]["band_crossings_left"], 0, "tooth {fdi}: {t}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1,8 +1,9 @@
 //! The stitching stage of one tooth: the band between the crown's margin and the root's cut
 //! loop, crown + band + root assembled into one closed mesh, the band untangled, and where a
 //! crossing the untangling cannot remove is left, the crown's fringe trimmed and the band built
-//! again (the crossed crown faces: [`super::crossed`]); where crossings are left after the
-//! builds, the best one is polished ([`super::polish`]).
+//! again (the crossed crown faces: [`super::crossed`]), or, where the band crosses no crown
+//! face, built with other tangent lengths; where crossings are left after the builds, the best
+//! one is polished ([`super::polish`]).
 
 use super::crossed::{crown_faces_hit, pierced_margin_faces};
 use super::fringe::Listed;
@@ -112,9 +113,12 @@ pub(super) fn builds_from(
     polish(ct, opts, kept, kept_trim, kept_side)
 }
 
-/// The band builds of one tooth from the crown side `side`: built, and where crossings are left the crown's fringe
-/// trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. Returns the build with the
-/// fewest crossings left (the earliest, least trimmed, on a tie), its trim and its crown side.
+/// The band builds of one tooth from the crown side `side`: built, and where crossings are
+/// left the crown's fringe trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. A
+/// build whose band crosses only itself or the root (no crown face to trim: a trim can leave
+/// the margin with a notch the band folds over) is first built again on the same crown with
+/// other tangent lengths ([`super::polish::reshaped`]). Returns the build with the fewest
+/// crossings left (the earliest, least trimmed, on a tie), its trim and its crown side.
 fn build_attempts(
     ct: &CutTooth,
     mut side: CrownSide,
@@ -127,15 +131,22 @@ fn build_attempts(
     // the one with the fewest crossings left is kept (the earliest, least trimmed, on a tie).
     let mut best: Option<(Assembled, super::fringe::FringeTrim, CrownSide)> = None;
     for attempt in 1..=MAX_ATTEMPTS {
-        let a = match first.take() {
+        let mut a = match first.take() {
             Some(a) => a,
             None => assemble(ct, &side, opts)?,
         };
-        let hits = if crossings_left(&a) > 0 {
+        let mut hits = if crossings_left(&a) > 0 {
             crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
         } else {
             Vec::new()
         };
+        if hits.is_empty() && crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0 {
+            // The band crosses only itself or the root: no trim can help, other tangents may.
+            a = super::polish::reshaped(ct, &side, opts, a);
+            if crossings_left(&a) > 0 {
+                hits = crown_faces_hit(&a, side.crown.positions.len(), attempt > 2);
+            }
+        }
         let next = if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
             None
         } else {

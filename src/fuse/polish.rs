@@ -98,14 +98,20 @@ fn polish_step(
 }
 
 /// Hermite tangent lengths (fractions of the loop-to-loop distance) of the band builds tried
-/// again on the best attempt's crown where crossings are left: a band leaving the margin
-/// steeper or flatter than the default passes a fold at the margin on another side.
+/// again on the best attempt's crown where crossings are left, and on a crown whose band
+/// crosses only itself or the root: a band leaving the margin steeper or flatter than the
+/// default passes a fold at the margin on another side.
 const RESHAPE_TANGENTS: [f64; 4] = [0.4, 1.2, 0.0, 1.6];
 
 /// Builds the band on `side` again with other tangent lengths ([`RESHAPE_TANGENTS`]) and keeps
 /// the build with the fewest crossings left (`best`, the default's, on a tie; a build that
 /// fails is skipped). Only teeth still crossed after the trimming attempts pay for it.
-fn reshaped(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions, mut best: Assembled) -> Assembled {
+pub(super) fn reshaped(
+    ct: &CutTooth,
+    side: &CrownSide,
+    opts: &FuseOptions,
+    mut best: Assembled,
+) -> Assembled {
     for t in RESHAPE_TANGENTS {
         if crossings_left(&best) == 0 {
             break;
