@@ -311,15 +311,7 @@ impl Round<'_> {
     /// vertex's whole fan (removing it alone would pinch the margin).
     fn removal(&self, is_fringe: &[bool], bad: &[bool]) -> Vec<bool> {
         let mesh = self.mesh;
-        let mut boundary_vertex = vec![false; mesh.positions.len()];
-        for t in &mesh.triangles {
-            for k in 0..3 {
-                if self.on_edge(t[k], t[(k + 1) % 3]) {
-                    boundary_vertex[t[k] as usize] = true;
-                    boundary_vertex[t[(k + 1) % 3] as usize] = true;
-                }
-            }
-        }
+        let boundary_vertex = self.topo().on_single_face_edge(mesh.positions.len());
         let mut remove = vec![false; mesh.triangles.len()];
         let mut fans: Vec<u32> = Vec::new();
         for f in (0..mesh.triangles.len()).filter(|&f| is_fringe[f] && bad[f]) {

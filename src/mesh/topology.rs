@@ -126,6 +126,30 @@ impl EdgeTopology {
         (boundary, non_manifold)
     }
 
+    /// Per vertex (`n` of them): whether it lies on an edge used by exactly one face (as
+    /// [`EdgeTopology::edge_face_count`] counts). One pass over the half-edges.
+    pub fn on_single_face_edge(&self, n: usize) -> Vec<bool> {
+        let mut on = vec![false; n];
+        let h = &self.half_edges;
+        let mut i = 0;
+        while i < h.len() {
+            let (a, b, _) = h[i];
+            let mut j = i + 1;
+            while j < h.len() && h[j].0 == a && h[j].1 == b {
+                j += 1;
+            }
+            if j - i == 1 && self.faces_of_directed(b, a).next().is_none() {
+                for v in [a, b] {
+                    if let Some(o) = on.get_mut(v as usize) {
+                        *o = true;
+                    }
+                }
+            }
+            i = j;
+        }
+        on
+    }
+
     /// Directed boundary half-edges: `a → b` present with no `b → a` partner, sorted.
     pub fn boundary_half_edges(&self) -> Vec<(u32, u32)> {
         self.half_edges
@@ -323,6 +347,46 @@ mod tests {
         let i = l.iter().position(|&v| v == 0).unwrap();
         let rot: Vec<u32> = (0..4).map(|k| l[(i + k) % 4]).collect();
         assert_eq!(rot, vec![0, 1, 2, 3]);
+    }
+
+    /// The vertices on single-face edges are those [`EdgeTopology::edge_face_count`] finds,
+    /// on random triangle soups over few vertices (boundary, non-manifold and twice-directed
+    /// edges, unused vertices).
+    #[test]
+    fn single_face_edge_vertices_match_edge_face_counts() {
+        let mut rng = crate::phantom::rng::Rng::new(3);
+        for case in 0..300 {
+            let n = 4 + case % 9;
+            let faces = 1 + rng.below(3 * n);
+            let tris: Vec<[u32; 3]> = (0..faces)
+                .map(|_| {
+                    // Three distinct vertices: the k-th vertex that is neither a nor b.
+                    let a = rng.below(n);
+                    let b = (a + 1 + rng.below(n - 1)) % n;
+                    let k = rng.below(n - 2);
+                    let c = (0..n).filter(|&x| x != a && x != b).nth(k).unwrap();
+                    [a as u32, b as u32, c as u32]
+                })
+                .collect();
+            let m = TriMesh::new(vec![glam::DVec3::ZERO; n + 2], tris);
+            let topo = EdgeTopology::new(&m);
+            let mut expect = vec![false; n + 2];
+            for t in &m.triangles {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if topo.edge_face_count(a, b) == 1 {
+                        expect[a as usize] = true;
+                        expect[b as usize] = true;
+                    }
+                }
+            }
+            assert_eq!(
+                topo.on_single_face_edge(n + 2),
+                expect,
+                "case {case}: {:?}",
+                m.triangles
+            );
+        }
     }
 
     #[test]
