@@ -141,29 +141,73 @@ impl Lattice {
         runs.push((j, idx, 1));
     }
 
-    /// Marks in `out` (by creation index) every candidate closer than `r` to `p`.
-    fn mark_within(&self, p: [f64; 2], r: f64, period: f64, out: &mut [bool]) {
+    /// Marks in `out` (by creation index) candidates `c` of `cand` closer to `p` than
+    /// `k·(size of c + e)`, sizes being at most `e_max`: every candidate marked is that close
+    /// (each is tested), though not every such candidate need be marked. Columns are taken
+    /// outwards from `p`'s until one marks nothing, and in each column's runs the rows outwards
+    /// from `p`'s height until one is not that close, so the work follows the marks.
+    fn mark_within(
+        &self,
+        p: [f64; 2],
+        (k, e, e_max): (f64, f64, f64),
+        period: f64,
+        cand: &[(f64, [f64; 2], f64)],
+        out: &mut [bool],
+    ) {
+        let r = k * (e_max + e);
         let ncols = self.runs.len() as i64;
         let kq = (p[0] / self.cx - 0.5).round() as i64;
         let dk = ((r / self.cx).ceil() as i64 + 1).min(ncols / 2);
-        for k in (kq - dk..=kq + dk).map(|k| k.rem_euclid(ncols) as usize) {
-            let xk = (k as f64 + 0.5) * self.cx;
-            let dx = wrap(xk - p[0], period);
-            if dx.abs() >= r {
-                continue;
-            }
-            let shift = self.shift(k);
-            let jlo = floor_i64((p[1] - r) / self.step - shift);
-            let jhi = ceil_i64((p[1] + r) / self.step - shift);
-            for &(j0, first, n) in &self.runs[k] {
-                for j in jlo.max(j0)..=jhi.min(j0 + n as i64 - 1) {
-                    let dy = (j as f64 + shift) * self.step - p[1];
-                    if dx * dx + dy * dy < r * r {
-                        out[(first + (j - j0) as u32) as usize] = true;
-                    }
+        for side in [1i64, -1] {
+            let first = if side == 1 { 0 } else { 1 };
+            for d in first..=dk {
+                let col = (kq + side * d).rem_euclid(ncols) as usize;
+                let dx = wrap((col as f64 + 0.5) * self.cx - p[0], period);
+                if dx.abs() >= r || (!self.mark_column(col, dx, p, (k, e), cand, out) && d > 0) {
+                    break;
                 }
             }
         }
+    }
+
+    /// [`Lattice::mark_within`] in column `col` (at `dx` from `p`): in each run, the rows
+    /// outwards from the one nearest `p`'s height while they are close enough. Whether any
+    /// was.
+    fn mark_column(
+        &self,
+        col: usize,
+        dx: f64,
+        p: [f64; 2],
+        (k, e): (f64, f64),
+        cand: &[(f64, [f64; 2], f64)],
+        out: &mut [bool],
+    ) -> bool {
+        let shift = self.shift(col);
+        let mut any = false;
+        let mut mark = |j: i64, j0: i64, first: u32| {
+            let dy = (j as f64 + shift) * self.step - p[1];
+            let idx = (first + (j - j0) as u32) as usize;
+            let rc = k * (cand[idx].2 + e);
+            let close = dx * dx + dy * dy < rc * rc;
+            if close {
+                out[idx] = true;
+                any = true;
+            }
+            close
+        };
+        for &(j0, first, n) in &self.runs[col] {
+            let last = j0 + n as i64 - 1;
+            let jc = ((p[1] / self.step - shift).round() as i64).clamp(j0, last);
+            let mut j = jc;
+            while j <= last && mark(j, j0, first) {
+                j += 1;
+            }
+            let mut j = jc - 1;
+            while j >= j0 && mark(j, j0, first) {
+                j -= 1;
+            }
+        }
+        any
     }
 }
 
@@ -301,7 +345,6 @@ fn sample_with(
     o: &SampleOptions,
     skip_sure: bool,
 ) -> Vec<[f64; 2]> {
-    let e_min = o.e_upper.min(o.e_lower);
     let e_max = o.e_upper.max(o.e_lower);
     let Candidates {
         cand,
@@ -339,9 +382,10 @@ fn sample_with(
         }
     }
     let n_fixed = pts.len();
-    // Candidates an accepted point is sure to reject (closer than the disk radius with the
-    // smallest size any candidate has), marked by creation index: most of the fine lattice,
-    // skipped without a grid search. The acceptances are those of the full test alone.
+    // Candidates an accepted point is sure to reject (closer than 0.999 of the disk radius
+    // with their own size, the margin covering rounding), marked by creation index: most of
+    // the fine lattice, skipped without a grid search. The acceptances are those of the full
+    // test alone.
     let mut rejected = vec![false; cand.len()];
     for idx in order {
         if rejected[idx as usize] {
@@ -370,8 +414,8 @@ fn sample_with(
         pgrid.insert_box(id, p, p);
         pts.push((p, e));
         if skip_sure {
-            let sure = 0.999 * o.radius * 0.5 * (e_min + e);
-            lattice.mark_within(p, sure, period, &mut rejected);
+            let k = 0.999 * o.radius * 0.5;
+            lattice.mark_within(p, (k, e, e_max), period, &cand, &mut rejected);
         }
     }
     pts[n_fixed..].iter().map(|&(p, _)| p).collect()
