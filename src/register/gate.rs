@@ -72,7 +72,9 @@ const TRANSLATION_REF_MM: f64 = 0.25;
 /// Mismatch score above which the jaw is refused as another patient's. On the phantom the margin
 /// is narrow: same-patient jaws scored up to 2.09 (register_accuracy) and 2.18 (wrong_data, two
 /// labels swapped, seed 6: its CBCT teeth lie 0.18 mm inside its IOS crowns), other patients'
-/// jaws of wrong_data from 2.29; real patients differ far more than its ±5 % arch size.
+/// jaws of wrong_data from 2.29; real patients differ far more than its ±5 % arch size. The
+/// distributions overlap: the same-patient jaws of seed 18 (CBCT teeth 0.18-0.20 mm inside the
+/// crowns) score 2.28-2.62 and are refused, while some other-patient pairs score from 1.7.
 const MAX_MISMATCH: f64 = 2.23;
 /// A crown whose fit to its own CBCT tooth is worse than this (mm) and at most [`BETTER`] times
 /// that on another tooth's CBCT is misnumbered.

@@ -62,10 +62,13 @@ pub(super) fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
     if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
         return Some(Error::RegistrationRejected(format!(
             "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
-             crowns lie a median {:.2} mm from their CBCT teeth and each tooth fitted alone moves across its axis \
-             a median {:.2} mm (mismatch score {:.2}; the same patient's scans score below 2.2 \
-             on the phantom, refused above {MAX_MISMATCH}); check that both scans are of this patient",
-            r.fit_mm, r.tooth_translation_mm, r.mismatch
+             crowns lie a median {:.2} mm from their CBCT teeth (the CBCT tooth surfaces {:+.2} mm \
+             off them) and each tooth fitted alone moves across its axis a median {:.2} mm \
+             (mismatch score {:.2}, refused above {MAX_MISMATCH}; on the phantom the same \
+             patient's scans score 1.1-2.6, another patient's from 1.7); check that both scans \
+             are of this patient; if they are (a CBCT segmentation biased by 0.2 mm or more, or a \
+             coarse scan, can score this high), accept questionable data to fuse anyway",
+            r.fit_mm, r.surface_offset_mm, r.tooth_translation_mm, r.mismatch
         )));
     }
     None
