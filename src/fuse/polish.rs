@@ -105,7 +105,8 @@ const RESHAPE_TANGENTS: [f64; 4] = [0.4, 1.2, 0.0, 1.6];
 
 /// Builds the band on `side` again with other tangent lengths ([`RESHAPE_TANGENTS`]) and keeps
 /// the build with the fewest crossings left (`best`, the default's, on a tie; a build that
-/// fails is skipped). Only teeth still crossed after the trimming attempts pay for it.
+/// fails is skipped). Only teeth still crossed after the trimming attempts, or whose band
+/// crosses no crown face but itself or the root, pay for it.
 pub(super) fn reshaped(
     ct: &CutTooth,
     side: &CrownSide,
