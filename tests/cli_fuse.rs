@@ -316,28 +316,14 @@ fn error_paths_name_the_file() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A coarse (decimated-like) export with slits at its crowns' margins, fused from the command
-/// line with its registration: the slits are closed where the first band build crossed the
-/// crown (measured: the upper canine 13, the second premolar 15 with three slits, the lateral
-/// incisor 22), and `report.json` carries it per tooth (a warning, `holes_filled`) beside
-/// `band_crossings_left`, 0 on every tooth of this jaw.
-#[test]
-fn coarse_export_slits_closed_and_reported() {
-    let d = tmp("coarse_slits");
+/// `toothfuse demo` with `demo_args` written under `d`, then fused from the command line with
+/// its own registration: the fused folder's report.json.
+fn demo_fused(d: &Path, demo_args: &[&str]) -> serde_json::Value {
     let demo = d.join("demo");
-    ok(&[
-        "demo",
-        "--seed",
-        "21",
-        "--jaw",
-        "upper",
-        "--variant",
-        "drift",
-        "--ios-export",
-        "coarse",
-        "--out",
-        s(&demo),
-    ]);
+    let mut args = vec!["demo"];
+    args.extend_from_slice(demo_args);
+    args.extend(["--out", s(&demo)]);
+    ok(&args);
     let out = d.join("fused");
     ok(&[
         "fuse",
@@ -348,8 +334,30 @@ fn coarse_export_slits_closed_and_reported() {
         "--out",
         s(&out),
     ]);
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap()
+}
+
+/// A coarse (decimated-like) export with slits at its crowns' margins, fused from the command
+/// line with its registration: the slits are closed where the first band build crossed the
+/// crown (measured: the upper canine 13, the second premolar 15 with three slits, the lateral
+/// incisor 22), and `report.json` carries it per tooth (a warning, `holes_filled`) beside
+/// `band_crossings_left`, 0 on every tooth of this jaw.
+#[test]
+fn coarse_export_slits_closed_and_reported() {
+    let d = tmp("coarse_slits");
+    let r = demo_fused(
+        &d,
+        &[
+            "--seed",
+            "21",
+            "--jaw",
+            "upper",
+            "--variant",
+            "drift",
+            "--ios-export",
+            "coarse",
+        ],
+    );
     let teeth = r["teeth"].as_array().unwrap();
     assert_eq!(teeth.len(), 14, "{r}");
     let mut closed = Vec::new();
@@ -378,30 +386,10 @@ fn coarse_export_slits_closed_and_reported() {
 #[test]
 fn coarse_lower_jaw_self_folded_band_reshaped() {
     let d = tmp("coarse_lower_reshaped");
-    let demo = d.join("demo");
-    ok(&[
-        "demo",
-        "--seed",
-        "16",
-        "--jaw",
-        "lower",
-        "--ios-export",
-        "coarse",
-        "--out",
-        s(&demo),
-    ]);
-    let out = d.join("fused");
-    ok(&[
-        "fuse",
-        "--ios",
-        s(&demo.join("ios.ply")),
-        "--cbct",
-        s(&demo.join("cbct.ply")),
-        "--out",
-        s(&out),
-    ]);
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let r = demo_fused(
+        &d,
+        &["--seed", "16", "--jaw", "lower", "--ios-export", "coarse"],
+    );
     let teeth = r["teeth"].as_array().unwrap();
     assert_eq!(teeth.len(), 14, "{r}");
     for t in teeth {

@@ -86,23 +86,31 @@ impl EdgeTopology {
     /// Undirected edges with their use count, sorted by (min, max).
     pub fn undirected_edges(&self) -> Vec<(u32, u32, usize)> {
         let mut out: Vec<(u32, u32, usize)> = Vec::with_capacity(self.half_edges.len() / 2 + 1);
-        let h = &self.half_edges;
-        let mut i = 0;
-        while i < h.len() {
-            let (a, b, _) = h[i];
-            let mut j = i;
-            while j < h.len() && h[j].0 == a && h[j].1 == b {
-                j += 1;
-            }
-            let same = j - i;
+        for (a, b, same) in self.directed_runs() {
             let rev = self.faces_of_directed(b, a).count();
             if a < b || rev == 0 {
                 out.push((a.min(b), a.max(b), same + rev));
             }
-            i = j;
         }
         out.sort_unstable();
         out
+    }
+
+    /// The directed edges `a → b` in sorted order, each with the number of faces using it in
+    /// that direction (the runs of equal `(a, b)` in the sorted half-edges).
+    fn directed_runs(&self) -> impl Iterator<Item = (u32, u32, usize)> + '_ {
+        let h = &self.half_edges;
+        let mut i = 0;
+        std::iter::from_fn(move || {
+            let &(a, b, _) = h.get(i)?;
+            let mut j = i + 1;
+            while j < h.len() && h[j].0 == a && h[j].1 == b {
+                j += 1;
+            }
+            let same = j - i;
+            i = j;
+            Some((a, b, same))
+        })
     }
 
     /// `(boundary, non-manifold)` undirected edge counts, classified as in
@@ -110,18 +118,9 @@ impl EdgeTopology {
     /// in one direction. One pass over the half-edges, nothing allocated.
     pub fn edge_counts(&self) -> (usize, usize) {
         let (mut boundary, mut non_manifold) = (0, 0);
-        let h = &self.half_edges;
-        let mut i = 0;
-        while i < h.len() {
-            let (a, b, _) = h[i];
-            let mut j = i + 1;
-            while j < h.len() && h[j].0 == a && h[j].1 == b {
-                j += 1;
-            }
-            let same = j - i;
+        for (a, b, same) in self.directed_runs() {
             let rev = self.faces_of_directed(b, a).count();
             count_edge(a, b, same, rev, &mut boundary, &mut non_manifold);
-            i = j;
         }
         (boundary, non_manifold)
     }
@@ -130,22 +129,14 @@ impl EdgeTopology {
     /// [`EdgeTopology::edge_face_count`] counts). One pass over the half-edges.
     pub fn on_single_face_edge(&self, n: usize) -> Vec<bool> {
         let mut on = vec![false; n];
-        let h = &self.half_edges;
-        let mut i = 0;
-        while i < h.len() {
-            let (a, b, _) = h[i];
-            let mut j = i + 1;
-            while j < h.len() && h[j].0 == a && h[j].1 == b {
-                j += 1;
-            }
-            if j - i == 1 && self.faces_of_directed(b, a).next().is_none() {
+        for (a, b, same) in self.directed_runs() {
+            if same == 1 && self.faces_of_directed(b, a).next().is_none() {
                 for v in [a, b] {
                     if let Some(o) = on.get_mut(v as usize) {
                         *o = true;
                     }
                 }
             }
-            i = j;
         }
         on
     }
