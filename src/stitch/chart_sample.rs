@@ -212,24 +212,29 @@ impl Lattice {
 }
 
 /// The creation indices of `cand` ordered by priority, then `x`, `y` and creation index (a
-/// stable radix sort on the priority's bits, the priorities being positive, then the rare runs
-/// of equal priority by the rest): the order the greedy acceptance depends on.
+/// stable radix sort on the priority's upper bits, the priorities being positive, then the rare
+/// runs that agree there by the whole priority and the rest): the order the greedy acceptance
+/// depends on.
 fn candidate_order(cand: &[(f64, [f64; 2], f64)]) -> Vec<u32> {
     debug_assert!(cand.iter().all(|c| c.0 >= 0.0));
     let mut keys: Vec<(u64, u32)> = (0..cand.len() as u32)
         .map(|i| (cand[i as usize].0.to_bits(), i))
         .collect();
-    crate::radix::sort_by_key(&mut keys, |k| k.0);
+    // The radix passes cover the priority's sign, exponent and upper mantissa bits only (3 of
+    // 11 bits instead of 6): priorities that agree there are rare and sorted in full below.
+    const LOW_BITS: u32 = 29;
+    crate::radix::sort_by_key(&mut keys, |k| k.0 >> LOW_BITS);
     let mut i = 0;
     while i < keys.len() {
         let mut j = i + 1;
-        while j < keys.len() && keys[j].0 == keys[i].0 {
+        while j < keys.len() && keys[j].0 >> LOW_BITS == keys[i].0 >> LOW_BITS {
             j += 1;
         }
         if j - i > 1 {
             keys[i..j].sort_unstable_by(|a, b| {
                 let (p, q) = (cand[a.1 as usize].1, cand[b.1 as usize].1);
-                p[0].total_cmp(&q[0])
+                a.0.cmp(&b.0)
+                    .then(p[0].total_cmp(&q[0]))
                     .then(p[1].total_cmp(&q[1]))
                     .then(a.1.cmp(&b.1))
             });
@@ -508,8 +513,12 @@ mod tests {
         let mut rng = crate::phantom::rng::Rng::new(5);
         let cand: Vec<(f64, [f64; 2], f64)> = (0..5000)
             .map(|_| {
-                // Few distinct priorities and x values, so ties reach every key.
-                let prio = rng.below(50) as f64 / 49.0;
+                // Few distinct priorities and x values, so ties reach every key; some
+                // priorities differ only in their lowest bits (below the radix passes).
+                let mut prio = rng.below(50) as f64 / 49.0;
+                if rng.below(3) == 0 {
+                    prio = f64::from_bits(prio.to_bits() + rng.below(1 << 20) as u64);
+                }
                 let x = rng.below(7) as f64;
                 (prio, [x, rng.range(-1.0, 1.0)], 0.1)
             })
