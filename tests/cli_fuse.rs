@@ -439,3 +439,24 @@ fn gate_refusal_names_the_way_to_fuse_anyway() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A rough upper jaw fused from the command line with its registration, where the band crosses
+/// two crown faces of the canine 23 that lie one ring in from the margin, behind faces nothing
+/// crosses (the peeling takes faces on the margin only): the faces on the margin beside them go
+/// first, the band is built again, and every tooth ends with no band crossing.
+#[test]
+fn rough_jaw_crossed_faces_off_the_margin_are_reached() {
+    let d = tmp("rough_off_margin");
+    let r = demo_fused(
+        &d,
+        &["--seed", "7", "--jaw", "upper", "--ios-export", "rough"],
+    );
+    let teeth = r["teeth"].as_array().unwrap();
+    assert_eq!(teeth.len(), 14, "{r}");
+    for t in teeth {
+        let fdi = t["fdi"].as_u64().unwrap();
+        assert_eq!(t["watertight"], true, "tooth {fdi}");
+        assert_eq!(t["quality"]["band_crossings_left"], 0, "tooth {fdi}: {t}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

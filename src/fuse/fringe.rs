@@ -24,7 +24,8 @@ pub enum Listed {
     /// at a vertex goes with that vertex's whole fan even where faces of the fan reach beyond.
     Apex,
     /// As [`Listed::Apex`], and a listed face on a margin edge whatever the reach of its
-    /// corners (after earlier trims the margin itself may lie beyond the reach).
+    /// corners (after earlier trims the margin itself may lie beyond the reach); where nothing
+    /// else goes, the fringe faces on the margin beside a listed face that lies off it.
     MarginEdge,
 }
 
@@ -309,9 +310,49 @@ impl Round<'_> {
     /// What lies under a removed face is looked at again in the next round. A target with an
     /// edge on the margin goes alone; one touching the margin at a vertex only goes with that
     /// vertex's whole fan (removing it alone would pinch the margin).
+    /// With [`Listed::MarginEdge`], where nothing else goes, the faces of [`Round::toward_margin`].
     fn removal(&self, is_fringe: &[bool], bad: &[bool]) -> Vec<bool> {
+        let boundary_vertex = self.topo().on_single_face_edge(self.mesh.positions.len());
+        let mut remove = self.peeled(is_fringe, bad, &boundary_vertex);
+        if self.mode == Listed::MarginEdge && !remove.contains(&true) {
+            self.toward_margin(is_fringe, bad, &boundary_vertex, &mut remove);
+        }
+        remove
+    }
+
+    /// Marks in `remove` the fringe faces on a margin edge that share a corner with a listed
+    /// target lying off the margin (no corner on it: one ring in, behind faces nothing
+    /// crosses), so that the target reaches the margin for the next build. Nothing else can
+    /// bring such a target to go: the peeling takes faces on the margin only.
+    fn toward_margin(
+        &self,
+        is_fringe: &[bool],
+        bad: &[bool],
+        boundary_vertex: &[bool],
+        remove: &mut [bool],
+    ) {
         let mesh = self.mesh;
-        let boundary_vertex = self.topo().on_single_face_edge(mesh.positions.len());
+        for f in 0..mesh.triangles.len() {
+            let t = mesh.triangles[f];
+            if !(is_fringe[f] && bad[f] && self.is_listed(f as u32))
+                || t.iter().any(|&v| boundary_vertex[v as usize])
+            {
+                continue;
+            }
+            for &v in &t {
+                for &(_, _, g) in self.topo().leaving(v) {
+                    let g = g as usize;
+                    if is_fringe[g] && self.on_margin_edge(g) {
+                        remove[g] = true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The peeling's part of [`Round::removal`] (see there).
+    fn peeled(&self, is_fringe: &[bool], bad: &[bool], boundary_vertex: &[bool]) -> Vec<bool> {
+        let mesh = self.mesh;
         let mut remove = vec![false; mesh.triangles.len()];
         let mut fans: Vec<u32> = Vec::new();
         for f in (0..mesh.triangles.len()).filter(|&f| is_fringe[f] && bad[f]) {
