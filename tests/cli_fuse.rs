@@ -385,11 +385,17 @@ fn coarse_export_slits_closed_and_reported() {
 /// with other tangent lengths, and every tooth ends with no crossing the fusion added.
 #[test]
 fn coarse_lower_jaw_self_folded_band_reshaped() {
-    let d = tmp("coarse_lower_reshaped");
-    let r = demo_fused(
-        &d,
+    fused_without_band_crossings(
+        "coarse_lower_reshaped",
         &["--seed", "16", "--jaw", "lower", "--ios-export", "coarse"],
     );
+}
+
+/// [`demo_fused`] in a fresh folder named `name`: all 14 teeth fused, each watertight with no
+/// band crossing left.
+fn fused_without_band_crossings(name: &str, demo_args: &[&str]) {
+    let d = tmp(name);
+    let r = demo_fused(&d, demo_args);
     let teeth = r["teeth"].as_array().unwrap();
     assert_eq!(teeth.len(), 14, "{r}");
     for t in teeth {
@@ -446,17 +452,8 @@ fn gate_refusal_names_the_way_to_fuse_anyway() {
 /// first, the band is built again, and every tooth ends with no band crossing.
 #[test]
 fn rough_jaw_crossed_faces_off_the_margin_are_reached() {
-    let d = tmp("rough_off_margin");
-    let r = demo_fused(
-        &d,
+    fused_without_band_crossings(
+        "rough_off_margin",
         &["--seed", "7", "--jaw", "upper", "--ios-export", "rough"],
     );
-    let teeth = r["teeth"].as_array().unwrap();
-    assert_eq!(teeth.len(), 14, "{r}");
-    for t in teeth {
-        let fdi = t["fdi"].as_u64().unwrap();
-        assert_eq!(t["watertight"], true, "tooth {fdi}");
-        assert_eq!(t["quality"]["band_crossings_left"], 0, "tooth {fdi}: {t}");
-    }
-    let _ = std::fs::remove_dir_all(&d);
 }
