@@ -135,17 +135,18 @@ fn build_attempts(
             Some(a) => a,
             None => assemble(ct, &side, opts)?,
         };
-        let mut hits = if crossings_left(&a) > 0 {
-            crown_faces_hit(&a, side.crown.positions.len(), attempt > 2)
-        } else {
-            Vec::new()
+        let hits_of = |a: &Assembled| {
+            if crossings_left(a) > 0 {
+                crown_faces_hit(a, side.crown.positions.len(), attempt > 2)
+            } else {
+                Vec::new()
+            }
         };
+        let mut hits = hits_of(&a);
         if hits.is_empty() && crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0 {
             // The band crosses only itself or the root: no trim can help, other tangents may.
             a = super::polish::reshaped(ct, &side, opts, a);
-            if crossings_left(&a) > 0 {
-                hits = crown_faces_hit(&a, side.crown.positions.len(), attempt > 2);
-            }
+            hits = hits_of(&a);
         }
         let next = if hits.is_empty() || opts.fringe_reach_mm <= 0.0 || attempt == MAX_ATTEMPTS {
             None
