@@ -819,9 +819,10 @@ toothfuse_status toothfuse_session_fused_quality(const struct toothfuse_session 
 
 /**
  * Writes the intersecting face pairs of fused tooth `fdi` by origin: to `*band_out` the pairs
- * with a band face that the fusion could not remove (0 when the output contract's "no crossing
- * added" holds for this tooth), to `*ios_out` the pairs of two kept IOS crown faces (the input
- * crown's own crossings, kept as given). Both exact; the first is counted during the fusion,
+ * the fusion added and could not remove, those with a band face and those with a face added to
+ * the crown (a hole's cap, a slit's strip) (0 when the output contract's "no crossing added"
+ * holds for this tooth), to `*ios_out` the pairs of two kept IOS crown faces (the input crown's
+ * own crossings, kept as given). Both exact; the first is counted during the fusion,
  * the second on this call (an all-pairs check of the crown: ~10–20 ms for 15 000 faces).
  * WRONG_STATE before a fuse; MISSING_DATA (with the reason) for a tooth that was not fused.
  *

@@ -402,9 +402,10 @@ pub unsafe extern "C" fn toothfuse_session_fused_quality(
 }
 
 /// Writes the intersecting face pairs of fused tooth `fdi` by origin: to `*band_out` the pairs
-/// with a band face that the fusion could not remove (0 when the output contract's "no crossing
-/// added" holds for this tooth), to `*ios_out` the pairs of two kept IOS crown faces (the input
-/// crown's own crossings, kept as given). Both exact; the first is counted during the fusion,
+/// the fusion added and could not remove, those with a band face and those with a face added to
+/// the crown (a hole's cap, a slit's strip) (0 when the output contract's "no crossing added"
+/// holds for this tooth), to `*ios_out` the pairs of two kept IOS crown faces (the input crown's
+/// own crossings, kept as given). Both exact; the first is counted during the fusion,
 /// the second on this call (an all-pairs check of the crown: ~10–20 ms for 15 000 faces).
 /// WRONG_STATE before a fuse; MISSING_DATA (with the reason) for a tooth that was not fused.
 ///
@@ -424,7 +425,8 @@ pub unsafe extern "C" fn toothfuse_session_fused_crossings(
             let t = fused_tooth(s, fdi)?;
             // SAFETY: forwarded contract on both output pointers.
             unsafe {
-                write_out(band_out, t.quality.band_crossings_left, "band_out")?;
+                let added = t.quality.band_crossings_left + t.quality.crown_crossings_added;
+                write_out(band_out, added, "band_out")?;
                 write_out(ios_out, t.ios_self_intersections(), "ios_out")
             }
         };

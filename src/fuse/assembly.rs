@@ -264,6 +264,18 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     if let Some(n) = q.self_intersections.filter(|&n| n > 0) {
         warnings.push(format!("{n} intersecting face pairs"));
     }
+    let crown_faces_added =
+        super::tooth::faces_added(&mesh.triangles[..band_start], &ios_vertex, &ct.input_faces);
+    q.crown_crossings_added = crate::mesh_check::crossing_pairs(&mesh, &crown_faces_added)
+        .into_iter()
+        .filter(|&(f, g)| (f as usize) < band_start && (g as usize) < band_start)
+        .count();
+    if q.crown_crossings_added > 0 {
+        warnings.push(format!(
+            "{} intersecting face pairs with a face added to the crown (a hole's cap no shape of which cleared the crown)",
+            q.crown_crossings_added
+        ));
+    }
     let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3;
     Ok(FusedTooth {
         fdi: ct.fdi,
@@ -271,6 +283,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         source,
         ios_vertex,
         band_faces: band_start..band_end,
+        crown_faces_added,
         quality: q,
         warnings,
         cut_ms: ct.cut_ms,

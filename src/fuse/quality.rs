@@ -56,6 +56,10 @@ pub struct ToothQuality {
     /// Intersecting face pairs with a band face that the band rebuilds and the untangling left
     /// (exact test; 0 when the band adds no crossing, or when the untangling is off).
     pub band_crossings_left: usize,
+    /// Intersecting face pairs of two crown faces, at least one of them added to the crown (a
+    /// hole's cap, a slit's strip; exact test). Caps and strips are made clear of the crown,
+    /// so this is 0 unless a hole's rim left no cap clear (a warning says so).
+    pub crown_crossings_added: usize,
 }
 
 impl ToothQuality {

@@ -27,6 +27,10 @@ pub struct FusedTooth {
     /// Faces of `mesh`: the crown's first (`0..band_faces.start`), then the band's
     /// (`band_faces`), then the root's.
     pub band_faces: std::ops::Range<usize>,
+    /// The crown faces (below `band_faces.start`, ascending) that are no face of the input
+    /// crown: caps of holes the repair filled and strips closing slits at the margin (a cap
+    /// face on the three corners of an input face, the face itself put back, counts as input).
+    pub crown_faces_added: Vec<u32>,
     /// Quality report.
     pub quality: ToothQuality,
     /// Warnings (filled holes, flipped input orientation, self-intersections).
@@ -47,8 +51,43 @@ impl FusedTooth {
             self.mesh.positions.clone(),
             self.mesh.triangles[..self.band_faces.start].to_vec(),
         );
-        crate::mesh_check::self_intersections(&crown).len()
+        let added = |f: u32| self.crown_faces_added.binary_search(&f).is_ok();
+        crate::mesh_check::self_intersections(&crown)
+            .into_iter()
+            .filter(|&(f, g)| !added(f) && !added(g))
+            .count()
     }
+}
+
+/// The input crown's faces as sorted corner triples, sorted: a crown face is one of the input's
+/// when its corners' input indices are found here.
+pub(super) fn face_keys(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut keys: Vec<[u32; 3]> = triangles
+        .iter()
+        .map(|t| {
+            let mut k = *t;
+            k.sort_unstable();
+            k
+        })
+        .collect();
+    keys.sort_unstable();
+    keys
+}
+
+/// The faces among `crown` (vertices mapped to input indices by `ios_vertex`, `u32::MAX` for
+/// none) that are no face of the input (`input_keys` from [`face_keys`]), ascending.
+pub(super) fn faces_added(
+    crown: &[[u32; 3]],
+    ios_vertex: &[u32],
+    input_keys: &[[u32; 3]],
+) -> Vec<u32> {
+    (0..crown.len() as u32)
+        .filter(|&f| {
+            let mut k = crown[f as usize].map(|v| ios_vertex[v as usize]);
+            k.sort_unstable();
+            k[2] == u32::MAX || input_keys.binary_search(&k).is_err()
+        })
+        .collect()
 }
 
 /// A tooth after crown removal, before stitching ([`cut_tooth`] → [`stitch_tooth`]): the
@@ -62,6 +101,8 @@ pub struct CutTooth {
     pub(super) crown_dirs: Vec<DVec3>,
     pub(super) frame: ToothFrame,
     pub(super) ios_vertex: Vec<u32>,
+    /// The input crown's faces ([`face_keys`]).
+    pub(super) input_faces: Vec<[u32; 3]>,
     pub(super) kept_ios: usize,
     pub(super) dropped: usize,
     pub(super) holes_filled: usize,
@@ -238,7 +279,7 @@ fn cut_inner(
         .saturating_sub(kept_ios + trimmed.vertices);
     if dropped > 0 {
         warnings.push(format!(
-            "{dropped} IOS crown vertices dropped by the repair (islands, unused)"
+            "{dropped} IOS crown vertices dropped by the repair (islands, unused, or only on faces taken with a hole)"
         ));
     }
     // Crown removal.
@@ -258,6 +299,7 @@ fn cut_inner(
         crown_dirs,
         frame,
         ios_vertex,
+        input_faces: face_keys(&ios_crown.triangles),
         kept_ios,
         dropped,
         holes_filled: rep.filled_holes,

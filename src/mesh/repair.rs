@@ -47,6 +47,12 @@ pub struct RepairReport {
     pub filled_holes: usize,
     /// Vertices added as hole centres.
     pub added_vertices: usize,
+    /// Filled holes whose cap crosses the surface: no cap tried was clear, even with the faces
+    /// crossed taken with the hole (see [`repair_open_surface`]); the cap crossing fewest faces
+    /// was kept.
+    pub crossing_caps: usize,
+    /// Faces taken with holes they lay over (their caps could not clear them).
+    pub rim_faces_removed: usize,
 }
 
 impl RepairReport {
@@ -56,12 +62,59 @@ impl RepairReport {
     }
 }
 
+/// Rounds of [`repair_open_surface`] that take the faces a hole's cap could not clear with the
+/// hole and cap it again.
+const RIM_ROUNDS: usize = 6;
+
 /// Repairs an open surface patch (see the module doc). Returns the repaired mesh, for each of
 /// its vertices the input vertex it comes from (`u32::MAX` for added hole centres), and a report.
+///
+/// A hole is capped only by a cap that crosses no face ([`super::hole_cap`]). Where every cap
+/// tried crosses some (a hole whose rim folds over it: scanner noise at a hole's edge), the
+/// faces crossed go with the hole (they lie over it) and the repair runs again, up to
+/// [`RIM_ROUNDS`] times; what is still crossed then is counted (`crossing_caps`). Positions
+/// never move: a vertex only the removed faces used is dropped like any unused vertex.
 pub fn repair_open_surface(
     mesh: &TriMesh,
     opts: &RepairOptions,
 ) -> (TriMesh, Vec<u32>, RepairReport) {
+    let mut input = std::borrow::Cow::Borrowed(mesh);
+    let mut removed = 0;
+    for round in 0.. {
+        let (m, source, mut rep, crossed) = repair_once(&input, opts);
+        if crossed.is_empty() || round == RIM_ROUNDS {
+            rep.rim_faces_removed = removed;
+            return (m, source, rep);
+        }
+        // The crossed faces as input faces (by their corners' input vertices).
+        let mut gone: Vec<[u32; 3]> = crossed
+            .iter()
+            .map(|&f| sorted_corners(m.triangles[f as usize].map(|v| source[v as usize])))
+            .collect();
+        gone.sort_unstable();
+        let kept: Vec<[u32; 3]> = input
+            .triangles
+            .iter()
+            .copied()
+            .filter(|&t| gone.binary_search(&sorted_corners(t)).is_err())
+            .collect();
+        removed += input.triangles.len() - kept.len();
+        input = std::borrow::Cow::Owned(TriMesh::new(mesh.positions.clone(), kept));
+    }
+    unreachable!("the rounds end at RIM_ROUNDS")
+}
+
+fn sorted_corners(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
+/// One pass of [`repair_open_surface`], also returning the faces of the repaired mesh that its
+/// caps cross (ascending; empty when every cap is clear).
+fn repair_once(
+    mesh: &TriMesh,
+    opts: &RepairOptions,
+) -> (TriMesh, Vec<u32>, RepairReport, Vec<u32>) {
     let mut rep = RepairReport::default();
     let n = mesh.positions.len();
     // 1. Degenerate and duplicate faces.
@@ -113,9 +166,11 @@ pub fn repair_open_surface(
         same_topo = None;
     }
     // 6. Fill small holes (every loop but the longest, up to the size limit).
-    if opts.max_hole_fraction > 0.0 {
-        fill_small_holes(&mut m, &mut source, same_topo.as_ref(), opts, &mut rep);
-    }
+    let crossed = if opts.max_hole_fraction > 0.0 {
+        fill_small_holes(&mut m, &mut source, same_topo.as_ref(), opts, &mut rep)
+    } else {
+        Vec::new()
+    };
     // 7. Drop unused vertices, keeping the source map in step.
     let map = m.compact();
     let mut new_source = vec![0u32; m.positions.len()];
@@ -124,7 +179,7 @@ pub fn repair_open_surface(
             new_source[new as usize] = source[old];
         }
     }
-    (m, new_source, rep)
+    (m, new_source, rep, crossed)
 }
 
 /// Step 1 of [`repair_open_surface`]: the faces without an out-of-range index, a repeated
@@ -208,16 +263,19 @@ fn two_faces_per_edge(faces: Vec<[u32; 3]>, n: usize, rep: &mut RepairReport) ->
 }
 
 /// Step 6 of [`repair_open_surface`]: every boundary loop but the longest (the margin) whose
-/// perimeter is at most `opts.max_hole_fraction` of the margin's is capped by a fan around a new
-/// vertex at its centroid (`source` gets `u32::MAX` for it); `same_topo` is `m`'s edge topology
-/// when still valid. Counted in `rep`.
+/// perimeter is at most `opts.max_hole_fraction` of the margin's is capped
+/// ([`super::hole_cap::cap_hole`]: a fan around a new vertex at its centroid where that crosses
+/// nothing, else another cap; `source` gets `u32::MAX` for a new vertex); `same_topo` is `m`'s
+/// edge topology when still valid. Counted in `rep`. Returns the faces of `m` crossed by caps
+/// (ascending), where no cap tried was clear.
 fn fill_small_holes(
     m: &mut TriMesh,
     source: &mut Vec<u32>,
     same_topo: Option<&EdgeTopology>,
     opts: &RepairOptions,
     rep: &mut RepairReport,
-) {
+) -> Vec<u32> {
+    let mut crossed = Vec::new();
     let loops = match same_topo {
         Some(topo) => boundary_loops_of(topo),
         None => boundary_loops(m),
@@ -235,28 +293,36 @@ fn fill_small_holes(
         .collect();
     // The margin: the longest loop (first of equals).
     let margin = (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
+    // Built once a hole is to be capped, when the caller's is stale. Caps of other holes never
+    // join two vertices of this one (holes sharing vertices are bow-ties, split in step 5), so
+    // it stays valid for the chords caps may use.
+    let mut built: Option<EdgeTopology> = None;
     if let Some(mi) = margin {
         for (i, l) in loops.iter().enumerate() {
             if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
                 continue;
             }
-            let c = l
-                .iter()
-                .fold(DVec3::ZERO, |a, &v| a + m.positions[v as usize])
-                / l.len() as f64;
-            let ci = m.positions.len() as u32;
-            m.positions.push(c);
-            source.push(u32::MAX);
-            // The loop runs with the surface on its left; the cap uses each boundary edge
-            // in the opposite direction.
-            for j in 0..l.len() {
-                let (a, b) = (l[j], l[(j + 1) % l.len()]);
-                m.triangles.push([b, a, ci]);
+            let topo = match same_topo {
+                Some(t) => t,
+                None => built.get_or_insert_with(|| EdgeTopology::new(m)),
+            };
+            let cap = super::hole_cap::cap_hole(m, topo, l);
+            if let Some(p) = cap.apex {
+                m.positions.push(p);
+                source.push(u32::MAX);
+                rep.added_vertices += 1;
+            }
+            m.triangles.extend_from_slice(&cap.faces);
+            if cap.crossings > 0 {
+                rep.crossing_caps += 1;
+                crossed.extend_from_slice(&cap.crossed);
             }
             rep.filled_holes += 1;
-            rep.added_vertices += 1;
         }
     }
+    crossed.sort_unstable();
+    crossed.dedup();
+    crossed
 }
 
 /// Whether no directed edge is used by two faces. With at most two faces per undirected edge

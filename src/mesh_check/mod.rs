@@ -13,6 +13,7 @@ pub use tri_tri::{
 };
 
 use crate::mesh::TriMesh;
+use glam::DVec3;
 
 /// Pairs of faces `(f, g)`, `f < g`, that intersect improperly: anything beyond sharing exactly
 /// the vertices/edge they have in common in the mesh (crossing, touching, coplanar overlap,
@@ -49,6 +50,59 @@ pub fn degenerate_faces(mesh: &TriMesh) -> usize {
 pub fn is_degenerate(mesh: &TriMesh, f: usize) -> bool {
     let t = mesh.triangles[f];
     t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || tri_tri::is_collinear(mesh, f)
+}
+
+fn face_box(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
+    let [a, b, c] = mesh.corners(f);
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
+/// Pairs `(f, g)` of faces of `mesh`, `f` among `candidates`, that cross (or touch improperly),
+/// exact test; each pair once, sorted. The candidates (a crown's fringe: a thin ring of faces)
+/// are binned, and every face of the mesh whose box meets their region looks up the candidates
+/// its box overlaps: linear in the mesh's faces, so cheap for a few candidates on a large mesh.
+pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    if candidates.is_empty() {
+        return out;
+    }
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut edges = 0.0;
+    for &f in candidates {
+        let (l, h) = face_box(mesh, f as usize);
+        lo = lo.min(l);
+        hi = hi.max(h);
+        let [a, b, c] = mesh.corners(f as usize);
+        edges += (b - a).length() + (c - b).length() + (a - c).length();
+    }
+    let cell = 2.0 * edges / (3 * candidates.len()) as f64;
+    let grid = TriangleGrid::over_region(mesh, candidates, (lo, hi), cell);
+    let mut hits = Vec::new();
+    for g in 0..mesh.triangles.len() as u32 {
+        let (gl, gh) = face_box(mesh, g as usize);
+        if !(gl.cmple(hi).all() && lo.cmple(gh).all()) {
+            continue;
+        }
+        hits.clear();
+        grid.for_each_in_box(gl, gh, |f| hits.push(f));
+        hits.sort_unstable();
+        hits.dedup();
+        for &f in &hits {
+            if f == g {
+                continue;
+            }
+            let (l, h) = face_box(mesh, f as usize);
+            if gl.cmple(h).all()
+                && l.cmple(gh).all()
+                && triangles_intersect(mesh, f as usize, g as usize)
+            {
+                out.push((f.min(g), f.max(g)));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 #[cfg(test)]

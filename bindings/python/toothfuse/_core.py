@@ -589,7 +589,8 @@ class Session:
         margin fringe and their largest distance from the margin in mm; ios_vertices_dropped:
         IOS crown vertices the crown repair dropped (stray tooth-labelled islands given back to
         the gingiva, vertices in no face); band_crossings_left:
-        intersecting face pairs with a band face the fusion left, 0 when it added none;
+        intersecting face pairs the fusion added and left (with a band face, or with a face
+        added to the crown: a hole's cap, a slit's strip), 0 when it added none;
         ios_self_intersections: the input crown's own intersecting face pairs, kept)."""
         q = _FusedQuality()
         self._check(_quality(self._h, fdi, ctypes.byref(q)))

@@ -1,6 +1,8 @@
 //! Unit tests of the `fringe` module.
 
 use super::*;
+use crate::mesh_check::triangles_intersect;
+use glam::DVec3;
 
 /// A fan of 8 faces: apex 0 at (0, 0, 1) over the unit ring 1..=8 (its margin).
 fn fan_crown() -> TriMesh {
