@@ -222,6 +222,7 @@ TEST(RealData, MeshLabelerIosScanWithRepairGives14OneLoopCrowns) {
         if (p[3 * i + k] != f.xyz[3 * src[i] + k]) moved++;
     }
     EXPECT_EQ(added, rep.added_vertices) << t;
+    EXPECT_EQ(rep.crossing_caps, 0u) << "tooth " << t << ": a hole's cap crosses the crown";
     EXPECT_EQ(moved, 0u) << "tooth " << t << ": a kept vertex moved";
   }
 }

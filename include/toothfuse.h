@@ -387,6 +387,16 @@ typedef struct toothfuse_repair_report {
    * Vertices added as hole centres (source vertex UINT32_MAX).
    */
   size_t added_vertices;
+  /**
+   * Triangles taken with a hole they lay over (no cap tried could clear them; their
+   * vertices stay unless only they used them).
+   */
+  size_t rim_faces_removed;
+  /**
+   * Filled holes whose cap still crosses the surface (0 unless no cap tried, with faces
+   * taken, was clear).
+   */
+  size_t crossing_caps;
 } toothfuse_repair_report;
 
 /**

@@ -98,6 +98,12 @@ pub struct toothfuse_repair_report {
     pub filled_holes: usize,
     /// Vertices added as hole centres (source vertex UINT32_MAX).
     pub added_vertices: usize,
+    /// Triangles taken with a hole they lay over (no cap tried could clear them; their
+    /// vertices stay unless only they used them).
+    pub rim_faces_removed: usize,
+    /// Filled holes whose cap still crosses the surface (0 unless no cap tried, with faces
+    /// taken, was clear).
+    pub crossing_caps: usize,
 }
 
 /// Writes `positions` into a caller's strided vertex buffer (x, y, z as 3 packed `scalar` values
@@ -334,6 +340,8 @@ pub unsafe extern "C" fn toothfuse_session_repair_report(
                     split_vertices: r.split_vertices,
                     filled_holes: r.filled_holes,
                     added_vertices: r.added_vertices,
+                    rim_faces_removed: r.rim_faces_removed,
+                    crossing_caps: r.crossing_caps,
                 },
             };
             // SAFETY: forwarded contract on `report_out`.

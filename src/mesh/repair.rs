@@ -69,10 +69,12 @@ const RIM_ROUNDS: usize = 6;
 /// Repairs an open surface patch (see the module doc). Returns the repaired mesh, for each of
 /// its vertices the input vertex it comes from (`u32::MAX` for added hole centres), and a report.
 ///
-/// A hole is capped only by a cap that crosses no face ([`super::hole_cap`]). Where every cap
-/// tried crosses some (a hole whose rim folds over it: scanner noise at a hole's edge), the
-/// faces crossed go with the hole (they lie over it) and the repair runs again, up to
-/// [`RIM_ROUNDS`] times; what is still crossed then is counted (`crossing_caps`). Positions
+/// A hole is capped only by a cap that crosses no face: the fan from its rim's centroid, fans
+/// from apexes moved along the rim's normal, or a triangulation of the rim's own vertices,
+/// whichever clears first. Where every cap tried crosses some (a hole whose rim folds over it:
+/// scanner noise at a hole's edge), the faces crossed go with the hole (they lie over it) and
+/// the repair runs again, up to 6 times; what is still crossed then is counted
+/// (`crossing_caps`). Positions
 /// never move: a vertex only the removed faces used is dropped like any unused vertex.
 pub fn repair_open_surface(
     mesh: &TriMesh,
