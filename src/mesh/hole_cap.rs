@@ -7,7 +7,7 @@
 
 use super::TriMesh;
 use super::topology::EdgeTopology;
-use crate::mesh_check::crossing_pairs;
+use crate::mesh_check::{TriangleGrid, triangles_intersect};
 use glam::DVec3;
 
 /// Offsets of a fan's apex from the rim's centroid along the rim's normal, in units of the
@@ -15,8 +15,9 @@ use glam::DVec3;
 const APEX_OFFSETS: [f64; 6] = [0.25, -0.25, 0.5, -0.5, 1.0, -1.0];
 
 /// Largest rim (vertices) triangulated without a new vertex: the triangulation's search takes
-/// time cubic in the rim's length.
-const MAX_FLAT_RIM: usize = 160;
+/// time cubic in the rim's length (~45 000 steps at this length). The rims of the holes real
+/// and rough crowns have are 3-40 vertices long.
+const MAX_FLAT_RIM: usize = 64;
 
 /// A hole's cap: its faces and, for a fan, the apex they share (the new vertex, given the index
 /// `apex_index` in the faces).
@@ -32,11 +33,21 @@ pub(super) struct Cap {
     pub(super) crossed: Vec<u32>,
 }
 
+/// What a cap is tested against: the surface's faces before any cap was added, binned once,
+/// and its edges. Each cap then costs what its neighbourhood holds, however many holes there are.
+pub(super) struct Surface<'a> {
+    /// The surface's edge topology (a triangulation never adds an edge the surface has).
+    pub(super) topo: &'a EdgeTopology,
+    /// The surface's faces (all of them, before any cap).
+    pub(super) grid: &'a TriangleGrid,
+}
+
 /// The cap of the hole `rim` of `m` (a boundary loop, the surface on its left): the first clear
 /// one of a fan from the rim's centroid, fans from apexes moved off it along the rim's normal,
-/// and a triangulation of the rim's own vertices; else the one crossing fewest faces (first of
-/// equals). `topo` is `m`'s edge topology (a triangulation never adds an edge `m` has).
-pub(super) fn cap_hole(m: &mut TriMesh, topo: &EdgeTopology, rim: &[u32]) -> Cap {
+/// and triangulations of the rim's own vertices; else the one crossing fewest faces (first of
+/// equals). Clear means crossing no face of `surface` and no face of itself; caps of other holes
+/// are checked by the caller.
+pub(super) fn cap_hole(m: &mut TriMesh, surface: &Surface, rim: &[u32]) -> Cap {
     let at = |v: u32| m.positions[v as usize];
     let centroid = rim.iter().fold(DVec3::ZERO, |a, &v| a + at(v)) / rim.len() as f64;
     let radius = rim
@@ -58,13 +69,13 @@ pub(super) fn cap_hole(m: &mut TriMesh, topo: &EdgeTopology, rim: &[u32]) -> Cap
     let fans = std::iter::once(0.0).chain(APEX_OFFSETS);
     for k in fans {
         let cap = fan(centroid + normal * (k * radius));
-        if let Some(clear) = keep_better(m, cap, &mut best) {
+        if let Some(clear) = keep_better(m, surface, cap, &mut best) {
             return clear;
         }
     }
     for shape in [Shape::Tilt, Shape::Fold] {
-        if let Some(cap) = flat_cap(m, topo, rim, shape)
-            && let Some(clear) = keep_better(m, cap, &mut best)
+        if let Some(cap) = flat_cap(m, surface.topo, rim, shape)
+            && let Some(clear) = keep_better(m, surface, cap, &mut best)
         {
             return clear;
         }
@@ -74,8 +85,13 @@ pub(super) fn cap_hole(m: &mut TriMesh, topo: &EdgeTopology, rim: &[u32]) -> Cap
 
 /// `cap` when it crosses nothing in `m`; else `None`, with `cap` (its crossings counted) put
 /// in `best` when it crosses fewer faces than the cap there.
-fn keep_better(m: &mut TriMesh, cap: Cap, best: &mut Option<Cap>) -> Option<Cap> {
-    let (crossings, crossed) = crossings_of(m, &cap);
+fn keep_better(
+    m: &mut TriMesh,
+    surface: &Surface,
+    cap: Cap,
+    best: &mut Option<Cap>,
+) -> Option<Cap> {
+    let (crossings, crossed) = crossings_of(m, surface.grid, &cap);
     if crossings == 0 {
         return Some(cap);
     }
@@ -89,26 +105,50 @@ fn keep_better(m: &mut TriMesh, cap: Cap, best: &mut Option<Cap>) -> Option<Cap>
     None
 }
 
-/// The face pairs `cap` crosses in `m` (with its apex added), and the faces of `m` among them
-/// (ascending): tested in place, then taken off.
-fn crossings_of(m: &mut TriMesh, cap: &Cap) -> (usize, Vec<u32>) {
+/// The face pairs `cap` crosses (with its apex added to `m`): with the faces binned in `grid`
+/// and among its own faces; and the faces of `m` among them (ascending). Tested in place, then
+/// taken off.
+fn crossings_of(m: &mut TriMesh, grid: &TriangleGrid, cap: &Cap) -> (usize, Vec<u32>) {
     let (nv, nf) = (m.positions.len(), m.triangles.len());
     if let Some(p) = cap.apex {
         m.positions.push(p);
     }
     m.triangles.extend_from_slice(&cap.faces);
-    let faces: Vec<u32> = (nf as u32..m.triangles.len() as u32).collect();
-    let pairs = crossing_pairs(m, &faces);
+    let boxes: Vec<(DVec3, DVec3)> = (0..m.triangles.len())
+        .skip(nf)
+        .map(|c| face_box(m, c))
+        .collect();
+    let overlap =
+        |a: (DVec3, DVec3), b: (DVec3, DVec3)| a.0.cmple(b.1).all() && b.0.cmple(a.1).all();
+    let (mut pairs, mut crossed, mut near) = (0, Vec::new(), Vec::new());
+    for (i, &bc) in boxes.iter().enumerate() {
+        let c = nf + i;
+        near.clear();
+        grid.for_each_in_box(bc.0, bc.1, |g| near.push(g));
+        near.sort_unstable();
+        near.dedup();
+        for &g in &near {
+            if overlap(bc, face_box(m, g as usize)) && triangles_intersect(m, c, g as usize) {
+                pairs += 1;
+                crossed.push(g);
+            }
+        }
+        for (j, &bd) in boxes[..i].iter().enumerate() {
+            if overlap(bc, bd) && triangles_intersect(m, c, nf + j) {
+                pairs += 1;
+            }
+        }
+    }
     m.triangles.truncate(nf);
     m.positions.truncate(nv);
-    let mut crossed: Vec<u32> = pairs
-        .iter()
-        .flat_map(|&(f, g)| [f, g])
-        .filter(|&f| (f as usize) < nf)
-        .collect();
     crossed.sort_unstable();
     crossed.dedup();
-    (pairs.len(), crossed)
+    (pairs, crossed)
+}
+
+pub(super) fn face_box(m: &TriMesh, f: usize) -> (DVec3, DVec3) {
+    let [a, b, c] = m.corners(f);
+    (a.min(b).min(c), a.max(b).max(c))
 }
 
 /// The rim's unit normal, pointing to the side the surface faces (the area vector of the rim

@@ -10,6 +10,7 @@ use super::TriMesh;
 use super::topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components_of};
 use super::validate::{non_manifold_vertices, non_manifold_vertices_of};
 use super::vertex_sort::sort_by_vertex;
+use crate::mesh_check::{TriangleGrid, triangles_intersect};
 use glam::DVec3;
 
 /// Options of [`repair_open_surface`].
@@ -295,10 +296,13 @@ fn fill_small_holes(
         .collect();
     // The margin: the longest loop (first of equals).
     let margin = (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
-    // Built once a hole is to be capped, when the caller's is stale. Caps of other holes never
-    // join two vertices of this one (holes sharing vertices are bow-ties, split in step 5), so
-    // it stays valid for the chords caps may use.
+    // Built once a hole is to be capped: the topology when the caller's is stale, and the grid
+    // of the faces before any cap. Caps of other holes never join two vertices of this one
+    // (holes sharing vertices are bow-ties, split in step 5), so the topology stays valid for
+    // the chords caps may use; crossings between caps are looked for once all are made.
     let mut built: Option<EdgeTopology> = None;
+    let mut grid: Option<TriangleGrid> = None;
+    let mut caps: Vec<std::ops::Range<usize>> = Vec::new();
     if let Some(mi) = margin {
         for (i, l) in loops.iter().enumerate() {
             if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
@@ -308,23 +312,52 @@ fn fill_small_holes(
                 Some(t) => t,
                 None => built.get_or_insert_with(|| EdgeTopology::new(m)),
             };
-            let cap = super::hole_cap::cap_hole(m, topo, l);
+            let grid = grid.get_or_insert_with(|| TriangleGrid::new(m, 0.0));
+            let surface = super::hole_cap::Surface { topo, grid };
+            let cap = super::hole_cap::cap_hole(m, &surface, l);
             if let Some(p) = cap.apex {
                 m.positions.push(p);
                 source.push(u32::MAX);
                 rep.added_vertices += 1;
             }
+            let first = m.triangles.len();
             m.triangles.extend_from_slice(&cap.faces);
             if cap.crossings > 0 {
                 rep.crossing_caps += 1;
                 crossed.extend_from_slice(&cap.crossed);
+            } else {
+                caps.push(first..m.triangles.len());
             }
             rep.filled_holes += 1;
         }
     }
+    rep.crossing_caps += caps_crossing_each_other(m, &caps);
     crossed.sort_unstable();
     crossed.dedup();
     crossed
+}
+
+/// Of the clear caps `caps` (face ranges of `m`, one per hole), those crossing a cap of another
+/// hole (holes close together): counted, nothing else can be done about them.
+fn caps_crossing_each_other(m: &TriMesh, caps: &[std::ops::Range<usize>]) -> usize {
+    if caps.len() < 2 {
+        return 0;
+    }
+    let faces: Vec<u32> = caps
+        .iter()
+        .flat_map(|r| r.clone())
+        .map(|f| f as u32)
+        .collect();
+    let hole_of = |f: u32| caps.partition_point(|r| r.end <= f as usize);
+    let mut crossing = vec![false; caps.len()];
+    for (f, g) in TriangleGrid::over(m, &faces, 0.0).candidate_pairs(m) {
+        let (a, b) = (hole_of(f), hole_of(g));
+        if a != b && triangles_intersect(m, f as usize, g as usize) {
+            crossing[a] = true;
+            crossing[b] = true;
+        }
+    }
+    crossing.iter().filter(|&&c| c).count()
 }
 
 /// Whether no directed edge is used by two faces. With at most two faces per undirected edge

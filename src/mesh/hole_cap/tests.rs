@@ -38,14 +38,28 @@ fn add_triangle(m: &mut TriMesh, p: [DVec3; 3]) {
 /// Face pairs the mesh crosses once `cap` is added.
 fn crossings_with(m: &TriMesh, cap: &Cap) -> usize {
     let mut m = m.clone();
-    crossings_of(&mut m, cap).0
+    let grid = TriangleGrid::new(&m, 0.0);
+    crossings_of(&mut m, &grid, cap).0
+}
+
+/// [`cap_hole`] of `rim` on `m` as a repair calls it.
+fn capped(m: &mut TriMesh, rim: &[u32]) -> Cap {
+    let topo = EdgeTopology::new(m);
+    let grid = TriangleGrid::new(m, 0.0);
+    cap_hole(
+        m,
+        &Surface {
+            topo: &topo,
+            grid: &grid,
+        },
+        rim,
+    )
 }
 
 #[test]
 fn a_flat_hole_gets_the_fan_from_its_centroid() {
     let (mut m, rim) = grid_with_hole(4, &[(1, 1), (2, 1), (1, 2), (2, 2)]);
-    let topo = EdgeTopology::new(&m);
-    let cap = cap_hole(&mut m, &topo, &rim);
+    let cap = capped(&mut m, &rim);
     assert_eq!(cap.apex, Some(DVec3::new(2.0, 2.0, 0.0)));
     assert_eq!(cap.faces.len(), rim.len());
     assert_eq!(cap.crossings, 0);
@@ -73,7 +87,6 @@ fn a_fin_over_the_hole_is_cleared_by_raising_the_apex() {
             DVec3::new(2.0, 2.0, 0.2),
         ],
     );
-    let topo = EdgeTopology::new(&m);
     let centroid = DVec3::new(2.0, 2.0, 0.0);
     let apex_index = m.positions.len() as u32;
     let centroid_fan = Cap {
@@ -88,7 +101,7 @@ fn a_fin_over_the_hole_is_cleared_by_raising_the_apex() {
         crossings_with(&m, &centroid_fan) > 0,
         "the centroid's fan crosses the fin"
     );
-    let cap = cap_hole(&mut m, &topo, &rim);
+    let cap = capped(&mut m, &rim);
     assert_eq!(cap.crossings, 0);
     assert_eq!(crossings_with(&m, &cap), 0);
     let apex = cap.apex.expect("a fan");
@@ -126,8 +139,7 @@ fn a_hole_no_fan_can_clear_gets_a_cap_on_its_rim() {
             c + DVec3::new(0.0, 0.0, 9.0),
         ],
     );
-    let topo = EdgeTopology::new(&m);
-    let cap = cap_hole(&mut m, &topo, &rim);
+    let cap = capped(&mut m, &rim);
     assert_eq!(cap.crossings, 0);
     assert_eq!(crossings_with(&m, &cap), 0);
     assert_eq!(cap.apex, None, "a cap on the rim's own vertices");
@@ -152,8 +164,7 @@ fn a_hole_no_cap_can_clear_keeps_the_cap_crossing_least_and_counts_it() {
             DVec3::new(2.0, 2.0, 50.0),
         ],
     );
-    let topo = EdgeTopology::new(&m);
-    let cap = cap_hole(&mut m, &topo, &rim);
+    let cap = capped(&mut m, &rim);
     assert!(cap.crossings > 0);
     assert_eq!(crossings_with(&m, &cap), cap.crossings);
 }
