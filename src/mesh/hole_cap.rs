@@ -57,14 +57,7 @@ pub(super) fn cap_hole(m: &mut TriMesh, surface: &Surface, rim: &[u32]) -> Cap {
         / rim.len() as f64;
     let normal = rim_normal(m, rim);
     let apex_index = m.positions.len() as u32;
-    let fan = |apex: DVec3| Cap {
-        faces: (0..rim.len())
-            .map(|j| [rim[(j + 1) % rim.len()], rim[j], apex_index])
-            .collect(),
-        apex: Some(apex),
-        crossings: 0,
-        crossed: Vec::new(),
-    };
+    let fan = |apex: DVec3| fan(rim, apex_index, apex);
     let mut best: Option<Cap> = None;
     let fans = std::iter::once(0.0).chain(APEX_OFFSETS);
     for k in fans {
@@ -81,6 +74,18 @@ pub(super) fn cap_hole(m: &mut TriMesh, surface: &Surface, rim: &[u32]) -> Cap {
         }
     }
     best.unwrap_or_else(|| fan(centroid))
+}
+
+/// The fan over `rim` from a new vertex at `apex`, to be given the index `apex_index`.
+pub(super) fn fan(rim: &[u32], apex_index: u32, apex: DVec3) -> Cap {
+    Cap {
+        faces: (0..rim.len())
+            .map(|j| [rim[(j + 1) % rim.len()], rim[j], apex_index])
+            .collect(),
+        apex: Some(apex),
+        crossings: 0,
+        crossed: Vec::new(),
+    }
 }
 
 /// `cap` when it crosses nothing in `m`; else `None`, with `cap` (its crossings counted) put

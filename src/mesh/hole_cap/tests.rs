@@ -89,14 +89,7 @@ fn a_fin_over_the_hole_is_cleared_by_raising_the_apex() {
     );
     let centroid = DVec3::new(2.0, 2.0, 0.0);
     let apex_index = m.positions.len() as u32;
-    let centroid_fan = Cap {
-        faces: (0..rim.len())
-            .map(|j| [rim[(j + 1) % rim.len()], rim[j], apex_index])
-            .collect(),
-        apex: Some(centroid),
-        crossings: 0,
-        crossed: Vec::new(),
-    };
+    let centroid_fan = fan(&rim, apex_index, centroid);
     assert!(
         crossings_with(&m, &centroid_fan) > 0,
         "the centroid's fan crosses the fin"
