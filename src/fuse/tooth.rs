@@ -232,12 +232,16 @@ fn cut_inner(
     let t_start = std::time::Instant::now();
     let mut warnings = Vec::new();
     // Real crowns are messy: make the crown one oriented manifold disk, filling small holes
-    // (every kept vertex keeps its exact position).
-    let (repaired, rep_src, rep) = repair_open_surface(ios_crown, &RepairOptions::default());
+    // (every kept vertex keeps its exact position). Repaired in the output frame: whether a
+    // hole's cap crosses the crown is decided exactly on the positions the fused mesh holds
+    // (in another frame, rounding can make a face touching a cap at a shared corner cross it).
+    let (crown, rep_src, rep) = repair_open_surface(
+        &ios_crown.transformed(ios_to_output),
+        &RepairOptions::default(),
+    );
     if !rep.is_clean() {
         warnings.push(format!("IOS crown repaired: {rep:?}"));
     }
-    let crown = repaired.transformed(ios_to_output);
     let (mut crown, rep_src, trimmed, dist_in) = fold_trim(
         crown,
         rep_src,
