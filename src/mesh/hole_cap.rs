@@ -15,8 +15,8 @@ use glam::DVec3;
 const APEX_OFFSETS: [f64; 6] = [0.25, -0.25, 0.5, -0.5, 1.0, -1.0];
 
 /// Largest rim (vertices) triangulated without a new vertex: the triangulation's search takes
-/// time cubic in the rim's length (~45 000 steps at this length). The rims of the holes real
-/// and rough crowns have are 3-40 vertices long.
+/// time cubic in the rim's length (~45 000 steps at this length). The holes whose fans crossed
+/// on rough phantom crowns had rims of 14-36 vertices.
 const MAX_FLAT_RIM: usize = 64;
 
 /// A hole's cap: its faces and, for a fan, the apex they share (the new vertex, given the index

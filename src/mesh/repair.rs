@@ -76,8 +76,8 @@ const RIM_ROUNDS: usize = 16;
 /// whichever clears first. Where every cap tried crosses some (a hole whose rim folds over it:
 /// scanner noise at a hole's edge), the faces crossed go with the hole (they lie over it) and
 /// the repair runs again, up to 16 times; what is still crossed then is counted
-/// (`crossing_caps`). Positions
-/// never move: a vertex only the removed faces used is dropped like any unused vertex.
+/// (`crossing_caps`). Positions never move: a vertex only the removed faces used is dropped
+/// like any unused vertex.
 pub fn repair_open_surface(
     mesh: &TriMesh,
     opts: &RepairOptions,
