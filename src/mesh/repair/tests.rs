@@ -342,3 +342,33 @@ fn thousands_of_small_holes_are_each_capped_clear() {
     }));
     assert_eq!(crate::mesh_check::crossing_pairs(&r, &added), vec![]);
 }
+
+/// Caps of two holes that cross each other are both counted; caps apart, and faces of one cap
+/// touching each other, are not.
+#[test]
+fn caps_of_different_holes_crossing_are_counted() {
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // Cap A: two faces in z = 0 sharing an edge; cap B: one upright face through A's first
+    // face; cap C: one face far away.
+    let positions = vec![
+        p(0.0, 0.0, 0.0),
+        p(2.0, 0.0, 0.0),
+        p(0.0, 2.0, 0.0),
+        p(2.0, 2.0, 0.0),
+        p(0.5, 0.5, -1.0),
+        p(0.6, 0.5, 1.0),
+        p(0.5, 0.6, 1.0),
+        p(9.0, 9.0, 0.0),
+        p(10.0, 9.0, 0.0),
+        p(9.0, 10.0, 0.0),
+    ];
+    let triangles = vec![[0, 1, 2], [1, 3, 2], [4, 5, 6], [7, 8, 9]];
+    let m = TriMesh::new(positions, triangles);
+    assert_eq!(caps_crossing_each_other(&m, &[0..2, 2..3, 3..4]), 2);
+    assert_eq!(caps_crossing_each_other(&m, &[0..2, 3..4]), 0);
+    assert_eq!(
+        caps_crossing_each_other(&m, &[0..3]),
+        0,
+        "one cap's own faces"
+    );
+}
