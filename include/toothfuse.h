@@ -62,7 +62,7 @@
  * Version of the C ABI described by this header; `toothfuse_abi_version()` returns the
  * library's. Bumped on every incompatible change to a function, struct or enum value.
  */
-#define TOOTHFUSE_ABI_VERSION 1
+#define TOOTHFUSE_ABI_VERSION 2
 
 /**
  * Result of every fallible `toothfuse_*` function. `TOOTHFUSE_STATUS_OK` is 0; any other value is

@@ -11,7 +11,7 @@ pub const TOOTHFUSE_VERSION_MINOR: u32 = 1;
 pub const TOOTHFUSE_VERSION_PATCH: u32 = 0;
 /// Version of the C ABI described by this header; `toothfuse_abi_version()` returns the
 /// library's. Bumped on every incompatible change to a function, struct or enum value.
-pub const TOOTHFUSE_ABI_VERSION: u32 = 1;
+pub const TOOTHFUSE_ABI_VERSION: u32 = 2;
 
 /// The library version as a static string, "MAJOR.MINOR.PATCH". Never NULL; never free it.
 /// Thread-safe.

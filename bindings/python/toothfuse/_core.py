@@ -48,7 +48,7 @@ _FLOAT64 = 1
 _VERTEX = 0
 _FACE = 1
 _OK = 0
-ABI_VERSION = 1
+ABI_VERSION = 2
 
 
 _BUNDLED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "libtoothfuse.so")
