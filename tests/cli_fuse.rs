@@ -407,6 +407,18 @@ fn fused_without_band_crossings(name: &str, demo_args: &[&str]) {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// A coarse lower jaw fused from the command line whose incisor 41's builds all leave the band
+/// crossing the CBCT root next to the cut (two pairs, no crown face to trim): the root faces
+/// crossed are peeled from the cut, the tooth is built again on the lower cut loop, and every
+/// tooth ends with no crossing added.
+#[test]
+fn coarse_lower_jaw_band_crossing_the_root_peels_the_root() {
+    fused_without_band_crossings(
+        "coarse_lower_root_peel",
+        &["--seed", "9", "--jaw", "lower", "--ios-export", "coarse"],
+    );
+}
+
 /// A rough lower jaw fused from the command line whose canine 43 has a hole no cap clears at
 /// first (its rim folds over it): the faces the caps cross are taken with the hole, round after
 /// round, until a cap is clear (more than 6 rounds, 43 faces); every tooth ends with no crossing

@@ -201,8 +201,32 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
     let mut warnings = ct.warnings.clone();
     let first = super::remedy::first_builds(ct, opts, &mut warnings)?;
-    let inlets_closed = first.inlets_closed;
-    let (a, trimmed) = super::remedy::remedies(ct, opts, first, &mut warnings);
+    let mut inlets_closed = first.inlets_closed;
+    let (mut a, mut trimmed) = super::remedy::remedies(ct, opts, first, &mut warnings);
+    // Left crossing the root and no crown face: the same builds on a root peeled at the cut,
+    // kept when they leave fewer crossings.
+    let root_peeled;
+    let ct = match (crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0)
+        .then(|| super::root_trim::root_trimmed(ct, &a))
+        .flatten()
+    {
+        Some(peeled) => {
+            let mut w = peeled.warnings.clone();
+            let built = super::remedy::first_builds(&peeled, opts, &mut w).map(|f| {
+                let inlets = f.inlets_closed;
+                (super::remedy::remedies(&peeled, opts, f, &mut w), inlets)
+            });
+            match built {
+                Ok(((a2, t2), inlets)) if crossings_left(&a2) < crossings_left(&a) => {
+                    (a, trimmed, inlets_closed, warnings) = (a2, t2, inlets, w);
+                    root_peeled = peeled;
+                    &root_peeled
+                }
+                _ => ct,
+            }
+        }
+        None => ct,
+    };
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",

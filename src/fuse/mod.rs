@@ -13,6 +13,7 @@ mod near_faces;
 mod polish;
 pub mod quality;
 mod remedy;
+mod root_trim;
 mod tooth;
 pub mod untangle;
 
