@@ -203,27 +203,16 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let first = super::remedy::first_builds(ct, opts, &mut warnings)?;
     let mut inlets_closed = first.inlets_closed;
     let (mut a, mut trimmed) = super::remedy::remedies(ct, opts, first, &mut warnings);
-    // Left crossing the root and no crown face: the same builds on a root peeled at the cut,
-    // kept when they leave fewer crossings.
+    // Left crossing the root and no crown face: the same builds on a root peeled at the cut.
+    let rebuilt = (crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0)
+        .then(|| super::root_trim::rebuilt_on_peeled_root(ct, opts, &a))
+        .flatten();
     let root_peeled;
-    let ct = match (crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0)
-        .then(|| super::root_trim::root_trimmed(ct, &a))
-        .flatten()
-    {
-        Some(peeled) => {
-            let mut w = peeled.warnings.clone();
-            let built = super::remedy::first_builds(&peeled, opts, &mut w).map(|f| {
-                let inlets = f.inlets_closed;
-                (super::remedy::remedies(&peeled, opts, f, &mut w), inlets)
-            });
-            match built {
-                Ok(((a2, t2), inlets)) if crossings_left(&a2) < crossings_left(&a) => {
-                    (a, trimmed, inlets_closed, warnings) = (a2, t2, inlets, w);
-                    root_peeled = peeled;
-                    &root_peeled
-                }
-                _ => ct,
-            }
+    let ct = match rebuilt {
+        Some(r) => {
+            (a, trimmed, inlets_closed, warnings) = (r.kept, r.trim, r.inlets_closed, r.warnings);
+            root_peeled = r.tooth;
+            &root_peeled
         }
         None => ct,
     };
@@ -290,10 +279,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     }
     let crown_faces_added =
         super::tooth::faces_added(&mesh.triangles[..band_start], &ios_vertex, &ct.input_faces);
-    q.crown_crossings_added = crate::mesh_check::crossing_pairs(&mesh, &crown_faces_added)
-        .into_iter()
-        .filter(|&(f, g)| (f as usize) < band_start && (g as usize) < band_start)
-        .count();
+    q.crown_crossings_added = crown_crossings(&mesh, band_start, &crown_faces_added);
     if q.crown_crossings_added > 0 {
         warnings.push(format!(
             "{} intersecting face pairs with a face added to the crown (a hole's cap no shape of which cleared the crown)",
@@ -313,6 +299,14 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         cut_ms: ct.cut_ms,
         stitch_ms,
     })
+}
+
+/// Intersecting pairs of two crown faces (below `band_start`) with one of `added` among them.
+fn crown_crossings(mesh: &TriMesh, band_start: usize, added: &[u32]) -> usize {
+    crate::mesh_check::crossing_pairs(mesh, added)
+        .into_iter()
+        .filter(|&(f, g)| (f as usize) < band_start && (g as usize) < band_start)
+        .count()
 }
 
 /// Adds one trim's counts to the tooth's.

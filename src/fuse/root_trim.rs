@@ -4,11 +4,46 @@
 //! tooth is built again on the lower cut loop. The root is the CBCT's, whose surface the output
 //! does not have to keep face for face: only the crown side's vertices are held bitwise.
 
-use super::assembly::Assembled;
-use super::fringe::{Listed, edge_distance, trim_fringe};
+use super::FuseOptions;
+use super::assembly::{Assembled, crossings_left};
+use super::fringe::{FringeTrim, Listed, edge_distance, trim_fringe};
 use super::tooth::{CutTooth, loop_chords, loop_dirs};
 use crate::mesh::{TriMesh, boundary_loops};
 use crate::stitch::BandVertex;
+
+/// The builds of a tooth made again on its root peeled at the cut ([`rebuilt_on_peeled_root`]).
+pub(super) struct Rebuilt {
+    /// The tooth with its root peeled.
+    pub(super) tooth: CutTooth,
+    /// The build kept, its trim and the number of slits closed on its crown.
+    pub(super) kept: Assembled,
+    pub(super) trim: FringeTrim,
+    pub(super) inlets_closed: usize,
+    /// The tooth's warnings, the peeling's among them.
+    pub(super) warnings: Vec<String>,
+}
+
+/// The builds of `ct` ([`super::remedy::first_builds`], [`super::remedy::remedies`]) made again
+/// on its root peeled at the cut for the build `a` ([`root_trimmed`]); `None` where no root can
+/// be peeled, the builds fail, or they leave no fewer crossings than `a`.
+pub(super) fn rebuilt_on_peeled_root(
+    ct: &CutTooth,
+    opts: &FuseOptions,
+    a: &Assembled,
+) -> Option<Rebuilt> {
+    let tooth = root_trimmed(ct, a)?;
+    let mut warnings = tooth.warnings.clone();
+    let first = super::remedy::first_builds(&tooth, opts, &mut warnings).ok()?;
+    let inlets_closed = first.inlets_closed;
+    let (kept, trim) = super::remedy::remedies(&tooth, opts, first, &mut warnings);
+    (crossings_left(&kept) < crossings_left(a)).then_some(Rebuilt {
+        tooth,
+        kept,
+        trim,
+        inlets_closed,
+        warnings,
+    })
+}
 
 /// How far (mm, along the root surface from the cut loop) root faces may be peeled.
 const ROOT_REACH_MM: f64 = 0.6;
@@ -35,7 +70,7 @@ fn root_faces_hit(a: &Assembled) -> Vec<u32> {
 /// `ct` with the root faces the build `a` left crossed (and the faces between them and the cut
 /// loop) peeled from its root, the cut loop and its directions and chords made anew; `None`
 /// when `a` crosses a crown face, crosses no root face, or nothing within the reach can go.
-pub(super) fn root_trimmed(ct: &CutTooth, a: &Assembled) -> Option<CutTooth> {
+fn root_trimmed(ct: &CutTooth, a: &Assembled) -> Option<CutTooth> {
     let hit = root_faces_hit(a);
     if hit.is_empty() {
         return None;
