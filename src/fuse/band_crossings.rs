@@ -9,10 +9,7 @@ use glam::DVec3;
 use std::ops::Range;
 
 /// Bounding box of face `f`.
-pub(super) fn bbox(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
-    let [a, b, c] = mesh.corners(f);
-    (a.min(b).min(c), a.max(b).max(c))
-}
+pub(super) use crate::mesh_check::face_box as bbox;
 
 /// Whether two boxes overlap (closed).
 pub(super) fn overlap(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {

@@ -8,7 +8,7 @@
 //! kept vertex and face is kept bitwise; the crown's own crossings farther up are the input's and
 //! stay.
 
-use crate::mesh::{RepairOptions, TriMesh, boundary_loops, repair_open_surface};
+use crate::mesh::{RepairOptions, TriMesh, boundary_loops, repair_open_surface, sorted_corners};
 pub use crate::mesh_check::crossing_pairs;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -404,19 +404,14 @@ fn peel(
         if (0..n).any(|v| used[v] && !present[v] && far(v)) {
             // The corners of every kept face the repair dropped (the pieces the removal cut
             // off), and the far vertices whose faces all went.
-            let key = |t: [u32; 3]| {
-                let mut k = t;
-                k.sort_unstable();
-                k
-            };
             let mut left: Vec<[u32; 3]> = rep
                 .triangles
                 .iter()
-                .map(|t| key(t.map(|v| rep_src[v as usize])))
+                .map(|t| sorted_corners(t.map(|v| rep_src[v as usize])))
                 .collect();
             left.sort_unstable();
             for t in &cut.triangles {
-                if left.binary_search(&key(*t)).is_err() {
+                if left.binary_search(&sorted_corners(*t)).is_err() {
                     for &v in t {
                         culprit[v as usize] = true;
                     }

@@ -6,7 +6,7 @@ use super::FuseOptions;
 use super::assembly::stitch_tooth;
 use super::quality::ToothQuality;
 use crate::cut::{self, RootCut, ToothFrame};
-use crate::mesh::{RepairOptions, TriMesh, boundary_loops, repair_open_surface};
+use crate::mesh::{RepairOptions, TriMesh, boundary_loops, repair_open_surface, sorted_corners};
 use crate::stitch::{self, BandVertex};
 use crate::{Error, Result, Rigid};
 use glam::DVec3;
@@ -62,14 +62,7 @@ impl FusedTooth {
 /// The input crown's faces as sorted corner triples, sorted: a crown face is one of the input's
 /// when its corners' input indices are found here.
 pub(super) fn face_keys(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
-    let mut keys: Vec<[u32; 3]> = triangles
-        .iter()
-        .map(|t| {
-            let mut k = *t;
-            k.sort_unstable();
-            k
-        })
-        .collect();
+    let mut keys: Vec<[u32; 3]> = triangles.iter().map(|&t| sorted_corners(t)).collect();
     keys.sort_unstable();
     keys
 }
@@ -83,8 +76,7 @@ pub(super) fn faces_added(
 ) -> Vec<u32> {
     (0..crown.len() as u32)
         .filter(|&f| {
-            let mut k = crown[f as usize].map(|v| ios_vertex[v as usize]);
-            k.sort_unstable();
+            let k = sorted_corners(crown[f as usize].map(|v| ios_vertex[v as usize]));
             k[2] == u32::MAX || input_keys.binary_search(&k).is_err()
         })
         .collect()

@@ -7,7 +7,7 @@
 
 use super::TriMesh;
 use super::topology::EdgeTopology;
-use crate::mesh_check::{TriangleGrid, triangles_intersect};
+use crate::mesh_check::{TriangleGrid, face_box, triangles_intersect};
 use glam::DVec3;
 
 /// Offsets of a fan's apex from the rim's centroid along the rim's normal, in units of the
@@ -149,11 +149,6 @@ fn crossings_of(m: &mut TriMesh, grid: &TriangleGrid, cap: &Cap) -> (usize, Vec<
     crossed.sort_unstable();
     crossed.dedup();
     (pairs, crossed)
-}
-
-pub(super) fn face_box(m: &TriMesh, f: usize) -> (DVec3, DVec3) {
-    let [a, b, c] = m.corners(f);
-    (a.min(b).min(c), a.max(b).max(c))
 }
 
 /// The rim's unit normal, pointing to the side the surface faces (the area vector of the rim

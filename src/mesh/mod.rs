@@ -20,6 +20,12 @@ pub use validate::{ValidateOptions, ValidationReport, non_manifold_vertices};
 
 use glam::DVec3;
 
+/// A face's corners in ascending order: the key of its vertex set, whatever its orientation.
+pub(crate) fn sorted_corners(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
 /// An indexed triangle mesh: positions in millimetres (f64), counter-clockwise triangles seen
 /// from outside.
 #[derive(Clone, Debug, Default, PartialEq)]

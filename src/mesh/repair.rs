@@ -6,10 +6,10 @@
 //! Every input vertex that is still used keeps its exact position; split bow-tie vertices are
 //! duplicated, never moved.
 
-use super::TriMesh;
 use super::topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components_of};
 use super::validate::{non_manifold_vertices, non_manifold_vertices_of};
 use super::vertex_sort::sort_by_vertex;
+use super::{TriMesh, sorted_corners};
 use crate::mesh_check::{TriangleGrid, triangles_intersect};
 use glam::DVec3;
 
@@ -108,11 +108,6 @@ pub fn repair_open_surface(
     unreachable!("the rounds end at RIM_ROUNDS")
 }
 
-fn sorted_corners(mut t: [u32; 3]) -> [u32; 3] {
-    t.sort_unstable();
-    t
-}
-
 /// One pass of [`repair_open_surface`], also returning the faces of the repaired mesh that its
 /// caps cross (ascending; empty when every cap is clear).
 fn repair_once(
@@ -203,8 +198,7 @@ fn distinct_faces(mesh: &TriMesh, rep: &mut RepairReport) -> Vec<[u32; 3]> {
             rep.degenerate_faces += 1;
             continue;
         }
-        let mut k = *t;
-        k.sort_unstable();
+        let k = sorted_corners(*t);
         seen.push(k);
         faces.push(*t);
     }

@@ -52,7 +52,8 @@ pub fn is_degenerate(mesh: &TriMesh, f: usize) -> bool {
     t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || tri_tri::is_collinear(mesh, f)
 }
 
-fn face_box(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
+/// The axis-aligned bounding box (lower, upper corner) of face `f` of `mesh`.
+pub fn face_box(mesh: &TriMesh, f: usize) -> (DVec3, DVec3) {
     let [a, b, c] = mesh.corners(f);
     (a.min(b).min(c), a.max(b).max(c))
 }
