@@ -78,7 +78,9 @@ fn main() -> anyhow::Result<()> {
     }
     for dir in dirs {
         let c = toothfuse::eval::foreign::read_case(&dir)?;
+        let t0 = Instant::now();
         let cut = cut_jaw(&c.ios, &c.cbct, &c.truth, &opts)?;
+        println!("cut {:.0} ms", t0.elapsed().as_secs_f64() * 1e3);
         let name = dir.file_name().unwrap_or_default().to_string_lossy();
         report(&name, &cut, &opts);
     }
@@ -91,7 +93,9 @@ fn main() -> anyhow::Result<()> {
             po.realism.ios.rough = export.roughness();
             let p = Phantom::generate(&po)?;
             let tr = toothfuse::eval::true_transforms(&p);
+            let t0 = Instant::now();
             let cut = cut_jaw(&p.ios, &p.cbct, &tr, &opts)?;
+            println!("cut {:.0} ms", t0.elapsed().as_secs_f64() * 1e3);
             report(&format!("phantom {export:?}"), &cut, &opts);
         }
     }

@@ -78,6 +78,13 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
     }
     let cell = 2.0 * edges / (3 * candidates.len()) as f64;
     let grid = TriangleGrid::over_region(mesh, candidates, (lo, hi), cell);
+    // A pair of two candidates is met from both sides: tested only from its larger face.
+    let mut is_candidate = vec![false; mesh.triangles.len()];
+    for &f in candidates {
+        if let Some(c) = is_candidate.get_mut(f as usize) {
+            *c = true;
+        }
+    }
     let mut hits = Vec::new();
     for g in 0..mesh.triangles.len() as u32 {
         let (gl, gh) = face_box(mesh, g as usize);
@@ -88,8 +95,9 @@ pub fn crossing_pairs(mesh: &TriMesh, candidates: &[u32]) -> Vec<(u32, u32)> {
         grid.for_each_in_box(gl, gh, |f| hits.push(f));
         hits.sort_unstable();
         hits.dedup();
+        let g_candidate = is_candidate[g as usize];
         for &f in &hits {
-            if f == g {
+            if f == g || (g_candidate && f > g) {
                 continue;
             }
             let (l, h) = face_box(mesh, f as usize);

@@ -35,6 +35,9 @@ struct Around {
     others: Vec<(u32, (DVec3, DVec3))>,
     star_members: Vec<usize>,
     fixed: Vec<FixedCorners>,
+    /// Scratch: the indices into `others` of the faces meeting the star's box at the
+    /// candidate being scored.
+    meeting: Vec<u32>,
 }
 
 impl Around {
@@ -50,6 +53,7 @@ impl Around {
         Around {
             v,
             fixed: vec![FixedCorners::Unknown; star.len() * others.len()],
+            meeting: Vec::with_capacity(others.len()),
             others,
             star_members,
         }
@@ -125,12 +129,31 @@ fn score(
         crossings > max_crossings
     };
     let n_others = around.others.len();
+    // The other faces meeting the star's box: only they can meet a star face's box (the same
+    // pairs tested, in the same order, as over all of them).
+    let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let star_box = boxes
+        .iter()
+        .fold(empty, |u, b| (u.0.min(b.0), u.1.max(b.1)));
+    around.meeting.clear();
+    around
+        .meeting
+        .extend((0..n_others as u32).filter(|&j| overlap(star_box, around.others[j as usize].1)));
     for (k, &f) in star.iter().enumerate() {
         let bf = boxes[k];
         let memo = &mut around.fixed[k * n_others..(k + 1) * n_others];
-        for (&(g, bg), m) in around.others.iter().zip(memo) {
+        for &j in &around.meeting {
+            let (g, bg) = around.others[j as usize];
             if overlap(bf, bg)
-                && count(&mut || intersect_moving_corner(mesh, f as usize, g as usize, around.v, m))
+                && count(&mut || {
+                    intersect_moving_corner(
+                        mesh,
+                        f as usize,
+                        g as usize,
+                        around.v,
+                        &mut memo[j as usize],
+                    )
+                })
             {
                 return None;
             }
