@@ -29,12 +29,16 @@ const SPHERE: [(f64, f64, f64); 14] = [
 /// The faces around a star, split once per vertex: the other faces (which do not move while
 /// the star's vertex `v` does) with their boxes, and the star's own faces among them by star
 /// index; `fixed[k * others.len() + j]` what the test of star face `k` with other face `j`
-/// knows of the star face's fixed corners (filled as the pairs are first tested).
+/// knows of the star face's fixed corners (filled as the pairs are first tested); and the
+/// pairs `(k, j)` found crossing at an earlier candidate (`hot`, marked in `is_hot`), tested
+/// first at the next ones: a candidate that cannot beat the best is most often out on them.
 struct Around {
     v: u32,
     others: Vec<(u32, (DVec3, DVec3))>,
     star_members: Vec<usize>,
     fixed: Vec<FixedCorners>,
+    hot: Vec<(u32, u32)>,
+    is_hot: Vec<bool>,
     /// Scratch: the indices into `others` of the faces meeting the star's box at the
     /// candidate being scored.
     meeting: Vec<u32>,
@@ -53,6 +57,8 @@ impl Around {
         Around {
             v,
             fixed: vec![FixedCorners::Unknown; star.len() * others.len()],
+            hot: Vec::new(),
+            is_hot: vec![false; star.len() * others.len()],
             meeting: Vec::with_capacity(others.len()),
             others,
             star_members,
@@ -117,20 +123,29 @@ fn score(
         Some(b) => b.0.checked_sub(1)?,
     };
     let mut crossings = 0;
-    // Each exact test spends one of the budget; true when the candidate is out.
-    let mut count = |hit: &mut dyn FnMut() -> bool| {
+    let n_others = around.others.len();
+    // Each exact test spends one of the budget (out when it is spent); a candidate is out past
+    // `max_crossings`. Which pairs are tested first changes how soon a candidate is out, not
+    // whether it is, nor the count of one that is not.
+    for i in 0..around.hot.len() {
+        let (k, j) = (around.hot[i].0 as usize, around.hot[i].1 as usize);
+        let (g, bg) = around.others[j];
+        if !overlap(boxes[k], bg) {
+            continue;
+        }
         if *budget == 0 {
-            return true;
+            return None;
         }
         *budget -= 1;
-        if hit() {
+        let memo = &mut around.fixed[k * n_others + j];
+        if intersect_moving_corner(mesh, star[k] as usize, g as usize, around.v, memo) {
             crossings += 1;
+            if crossings > max_crossings {
+                return None;
+            }
         }
-        crossings > max_crossings
-    };
-    let n_others = around.others.len();
-    // The other faces meeting the star's box: only they can meet a star face's box (the same
-    // pairs tested, in the same order, as over all of them).
+    }
+    // The other faces meeting the star's box: only they can meet a star face's box.
     let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     let star_box = boxes
         .iter()
@@ -141,29 +156,41 @@ fn score(
         .extend((0..n_others as u32).filter(|&j| overlap(star_box, around.others[j as usize].1)));
     for (k, &f) in star.iter().enumerate() {
         let bf = boxes[k];
-        let memo = &mut around.fixed[k * n_others..(k + 1) * n_others];
-        for &j in &around.meeting {
-            let (g, bg) = around.others[j as usize];
-            if overlap(bf, bg)
-                && count(&mut || {
-                    intersect_moving_corner(
-                        mesh,
-                        f as usize,
-                        g as usize,
-                        around.v,
-                        &mut memo[j as usize],
-                    )
-                })
-            {
+        for m in 0..around.meeting.len() {
+            let j = around.meeting[m] as usize;
+            let (g, bg) = around.others[j];
+            if around.is_hot[k * n_others + j] || !overlap(bf, bg) {
+                continue;
+            }
+            if *budget == 0 {
                 return None;
             }
+            *budget -= 1;
+            let memo = &mut around.fixed[k * n_others + j];
+            if intersect_moving_corner(mesh, f as usize, g as usize, around.v, memo) {
+                around.is_hot[k * n_others + j] = true;
+                around.hot.push((k as u32, j as u32));
+                crossings += 1;
+                if crossings > max_crossings {
+                    return None;
+                }
+            }
         }
+    }
+    for (k, &f) in star.iter().enumerate() {
         for &j in &around.star_members {
-            if j > k
-                && overlap(bf, boxes[j])
-                && count(&mut || triangles_intersect(mesh, f as usize, star[j] as usize))
-            {
+            if j <= k || !overlap(boxes[k], boxes[j]) {
+                continue;
+            }
+            if *budget == 0 {
                 return None;
+            }
+            *budget -= 1;
+            if triangles_intersect(mesh, f as usize, star[j] as usize) {
+                crossings += 1;
+                if crossings > max_crossings {
+                    return None;
+                }
             }
         }
     }
