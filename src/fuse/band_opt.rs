@@ -15,11 +15,23 @@ use rustc_hash::FxHashMap as HashMap;
 /// the corner with the largest cosine (computed as `angle_between` does), so with one inverse
 /// cosine instead of three.
 pub(super) fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    angle_of_cos(max_cos(a, b, c))
+}
+
+/// The largest corner cosine of a triangle (NaN only for a degenerate one): its smallest angle
+/// is [`angle_of_cos`] of it. Since the inverse cosine is correctly rounded, hence monotone, the
+/// smallest angle of several triangles is that of their largest cosine: comparisons need one
+/// inverse cosine, or none.
+pub(super) fn max_cos(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let cos = |p: DVec3, q: DVec3, r: DVec3| {
         let (u, v) = (q - p, r - p);
         u.dot(v) / (u.length_squared() * v.length_squared()).sqrt()
     };
-    let m = cos(a, b, c).max(cos(b, c, a)).max(cos(c, a, b));
+    cos(a, b, c).max(cos(b, c, a)).max(cos(c, a, b))
+}
+
+/// The angle (degrees) whose cosine is `m`, clamped to [-1, 1]; 0 for NaN.
+pub(super) fn angle_of_cos(m: f64) -> f64 {
     let deg = m.clamp(-1.0, 1.0).acos().to_degrees();
     if deg.is_finite() { deg } else { 0.0 }
 }
@@ -101,10 +113,18 @@ fn flip_pass_where(
             continue;
         }
         let p = |v: u32| mesh.positions[v as usize];
-        let old = min_angle(p(a), p(b), p(c)).min(min_angle(p(b), p(a), p(d)));
         // New faces: (c, a, d) and (d, b, c) keep the orientation.
         let (n1, n2) = ([c, a, d], [d, b, c]);
-        let new = min_angle(p(c), p(a), p(d)).min(min_angle(p(d), p(b), p(c)));
+        let cos_old = [max_cos(p(a), p(b), p(c)), max_cos(p(b), p(a), p(d))];
+        let cos_new = [max_cos(p(c), p(a), p(d)), max_cos(p(d), p(b), p(c))];
+        // A larger largest cosine is a smaller smallest angle: no gain, no inverse cosine.
+        if cos_old.iter().chain(&cos_new).all(|m| !m.is_nan())
+            && cos_new[0].max(cos_new[1]) >= cos_old[0].max(cos_old[1])
+        {
+            continue;
+        }
+        let old = angle_of_cos(cos_old[0]).min(angle_of_cos(cos_old[1]));
+        let new = angle_of_cos(cos_new[0]).min(angle_of_cos(cos_new[1]));
         if new <= old + 1e-6 {
             continue;
         }

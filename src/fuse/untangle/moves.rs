@@ -2,7 +2,7 @@
 //! candidate scored exactly against the faces around the star.
 
 use super::super::band_crossings::{bbox, overlap};
-use super::super::band_opt::min_angle;
+use super::super::band_opt::{angle_of_cos, max_cos};
 use super::super::near_faces::NearFaces;
 use crate::mesh::TriMesh;
 use crate::mesh_check::{FixedCorners, intersect_moving_corner, triangles_intersect};
@@ -102,7 +102,10 @@ fn score(
     beat: Option<Key>,
     budget: &mut usize,
 ) -> Option<(usize, usize, f64)> {
-    let mut ang = 180.0f64;
+    // The smallest angle of the star is that of its largest corner cosine (0 when a face is
+    // degenerate).
+    let mut cos = f64::NEG_INFINITY;
+    let mut degenerate = false;
     let mut folded = 0;
     let mut boxes = Vec::with_capacity(star.len());
     for (k, &f) in star.iter().enumerate() {
@@ -111,9 +114,18 @@ fn score(
         if n.dot(normals[k]) <= 0.0 {
             folded += 1;
         }
-        ang = ang.min(min_angle(a, b, c));
+        let m = max_cos(a, b, c);
+        degenerate |= m.is_nan();
+        cos = cos.max(m);
         boxes.push((a.min(b).min(c), a.max(b).max(c)));
     }
+    let ang = if degenerate {
+        0.0
+    } else if star.is_empty() {
+        180.0
+    } else {
+        angle_of_cos(cos)
+    };
     if folded > max_folded {
         return None;
     }
