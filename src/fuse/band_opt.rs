@@ -19,9 +19,10 @@ pub(super) fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 /// The largest corner cosine of a triangle (NaN only for a degenerate one): its smallest angle
-/// is [`angle_of_cos`] of it. Since the inverse cosine is correctly rounded, hence monotone, the
-/// smallest angle of several triangles is that of their largest cosine: comparisons need one
-/// inverse cosine, or none.
+/// is [`angle_of_cos`] of it. The inverse cosine decreases (up to its last bit), so the smallest
+/// angle of several triangles is that of their largest cosine, and a larger largest cosine is
+/// no larger smallest angle: comparisons need one inverse cosine, or none. The angles compared
+/// here are compared with tolerances (0.1°, 10⁻⁶°) far above a last bit.
 pub(super) fn max_cos(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let cos = |p: DVec3, q: DVec3, r: DVec3| {
         let (u, v) = (q - p, r - p);
