@@ -99,8 +99,10 @@ pub fn cut_jaw(
         };
         work.push((fdi, crown, tooth, t));
     }
-    let results = crate::par::map_ordered(
+    // The largest crowns and teeth first (see `map_ordered_by_cost`).
+    let results = crate::par::map_ordered_by_cost(
         &work,
+        |w| w.1.triangles.len() + w.2.triangles.len(),
         |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
             (
                 fdi,
@@ -142,7 +144,12 @@ pub fn cut_jaw(
 /// failures are carried over; a tooth whose stitching fails joins them. `opts.cut` is not used.
 pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
     let work: Vec<&CutTooth> = cut.teeth.values().collect();
-    let results = crate::par::map_ordered(&work, |c| (c.fdi(), stitch_tooth(c, opts)));
+    // The longest margins first: the band grows with the margin (see `map_ordered_by_cost`).
+    let results = crate::par::map_ordered_by_cost(
+        &work,
+        |c| c.margin.len(),
+        |c| (c.fdi(), stitch_tooth(c, opts)),
+    );
     let mut jaw = FusedJaw {
         ios_only: cut.ios_only.clone(),
         cbct_only: cut.cbct_only.clone(),
