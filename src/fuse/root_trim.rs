@@ -105,3 +105,119 @@ fn root_trimmed(ct: &CutTooth, a: &Assembled) -> Option<CutTooth> {
     ));
     Some(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fuse::assembly::{assemble, cut_side};
+    use crate::fuse::untangle::UntangleReport;
+    use crate::fuse::{cut_tooth, stitch_tooth};
+    use crate::geom::Rigid;
+    use crate::mesh::EdgeTopology;
+    use crate::mesh::fixtures::ellipsoid;
+
+    /// A tooth standing along z: a CBCT ellipsoid and, as the IOS crown, the top of a finer one.
+    fn ellipsoid_tooth() -> (TriMesh, CutTooth) {
+        let cbct = ellipsoid(40, 48, 4.0, 10.0);
+        let fine = ellipsoid(80, 96, 4.0, 10.0);
+        let above = |v: u32| fine.positions[v as usize].z > 4.0;
+        let mut crown = TriMesh::new(
+            fine.positions.clone(),
+            fine.triangles
+                .iter()
+                .copied()
+                .filter(|t| t.iter().all(|&v| above(v)))
+                .collect(),
+        );
+        crown.compact();
+        let opts = FuseOptions::default();
+        let ct = cut_tooth(11, &crown, &cbct, &Rigid::IDENTITY, &Rigid::IDENTITY, &opts)
+            .expect("the ellipsoid tooth cuts");
+        (cbct, ct)
+    }
+
+    /// A build of `ct` whose untangling left its first band face crossing the root faces `hit`
+    /// (indices into the root) and, with `crown_face`, crown face 0 too.
+    fn crossed_build(ct: &CutTooth, hit: &[u32], crown_face: bool) -> Assembled {
+        let mut a = assemble(ct, &cut_side(ct), &FuseOptions::default()).expect("builds");
+        let band_face = a.band.start as u32;
+        let mut pairs: Vec<(u32, u32)> = hit
+            .iter()
+            .map(|&r| (band_face, r + a.band.end as u32))
+            .collect();
+        if crown_face {
+            pairs.push((0, band_face));
+        }
+        a.untangle = Some(UntangleReport {
+            crossings_before: pairs.len(),
+            crossings_after: pairs.len(),
+            crossing_pairs: pairs,
+            ..UntangleReport::default()
+        });
+        a
+    }
+
+    /// Root faces a band crosses at the cut go, with nothing beyond the reach: the peeled root
+    /// is one disk whose boundary is the new cut loop, every kept vertex is the CBCT's own (by
+    /// its source index), the crossed faces are gone, the count of removed faces grows by what
+    /// was peeled, and the tooth built on it is closed; a pair with a crown face, or no root
+    /// face in any pair, leaves the root as it is.
+    #[test]
+    fn root_faces_the_band_crosses_are_peeled_from_the_cut() {
+        let (cbct, ct) = ellipsoid_tooth();
+        let root = &ct.root.root;
+        let topo = EdgeTopology::new(root);
+        let on_cut: Vec<u32> = (0..root.triangles.len() as u32)
+            .filter(|&f| {
+                let t = root.triangles[f as usize];
+                (0..3).any(|k| topo.edge_face_count(t[k], t[(k + 1) % 3]) == 1)
+            })
+            .collect();
+        assert!(on_cut.len() > 20, "{} faces on the cut", on_cut.len());
+        let hit = [on_cut[3], on_cut[on_cut.len() / 2]];
+        let key = |m: &TriMesh, src: &[u32], f: usize| {
+            crate::mesh::sorted_corners(m.triangles[f].map(|v| src[v as usize]))
+        };
+        let hit_keys: Vec<[u32; 3]> = hit
+            .iter()
+            .map(|&f| key(root, &ct.root.source_vertex, f as usize))
+            .collect();
+
+        assert!(root_trimmed(&ct, &crossed_build(&ct, &hit, true)).is_none());
+        assert!(root_trimmed(&ct, &crossed_build(&ct, &[], false)).is_none());
+
+        let peeled = root_trimmed(&ct, &crossed_build(&ct, &hit, false)).expect("peeled");
+        let (r, src) = (&peeled.root.root, &peeled.root.source_vertex);
+        let peeled_faces = peeled.root.removed_faces - ct.root.removed_faces;
+        assert!(peeled_faces >= hit.len(), "{peeled_faces} faces peeled");
+        assert_eq!(r.triangles.len() + peeled_faces, root.triangles.len());
+        for f in 0..r.triangles.len() {
+            assert!(!hit_keys.contains(&key(r, src, f)), "face {f} was crossed");
+        }
+        assert_eq!(boundary_loops(r), vec![peeled.root.cut_loop.clone()]);
+        assert_eq!(peeled.root_dirs.len(), peeled.root.cut_loop.len());
+        assert_eq!(src.len(), r.positions.len());
+        for (v, &s) in src.iter().enumerate() {
+            assert_eq!(r.positions[v], cbct.positions[s as usize], "vertex {v}");
+        }
+        // The vertices left out lie within the reach of the first cut loop.
+        let dist = edge_distance(root, &ct.root.cut_loop, f64::INFINITY);
+        let kept: std::collections::BTreeSet<u32> = src.iter().copied().collect();
+        for (v, &s) in ct.root.source_vertex.iter().enumerate() {
+            if !kept.contains(&s) {
+                assert!(dist[v] <= ROOT_REACH_MM, "vertex {v} at {} mm", dist[v]);
+            }
+        }
+        assert!(
+            peeled
+                .warnings
+                .last()
+                .unwrap()
+                .contains("root faces peeled")
+        );
+        let fused = stitch_tooth(&peeled, &FuseOptions::default()).expect("stitches");
+        let q = &fused.quality;
+        assert!(q.closed && q.manifold && q.components == 1, "{q:?}");
+        assert!(q.volume > 0.0);
+    }
+}

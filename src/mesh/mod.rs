@@ -182,6 +182,38 @@ pub(crate) mod fixtures {
         )
     }
 
+    /// A closed, outward-oriented ellipsoid with semi-axes `(r, r, c)` about the origin: `rings`
+    /// latitude rings of `segments` vertices each between the two poles (the last two
+    /// vertices), the rings from the south pole up.
+    pub fn ellipsoid(rings: u32, segments: u32, r: f64, c: f64) -> TriMesh {
+        let mut positions = Vec::new();
+        for i in 0..rings {
+            let lat = std::f64::consts::PI * ((i + 1) as f64 / (rings + 1) as f64 - 0.5);
+            for j in 0..segments {
+                let lon = std::f64::consts::TAU * j as f64 / segments as f64;
+                positions.push(DVec3::new(
+                    r * lat.cos() * lon.cos(),
+                    r * lat.cos() * lon.sin(),
+                    c * lat.sin(),
+                ));
+            }
+        }
+        let (south, north) = (rings * segments, rings * segments + 1);
+        positions.push(DVec3::new(0.0, 0.0, -c));
+        positions.push(DVec3::new(0.0, 0.0, c));
+        let at = |i: u32, j: u32| i * segments + j % segments;
+        let mut triangles = Vec::new();
+        for j in 0..segments {
+            triangles.push([south, at(0, j + 1), at(0, j)]);
+            triangles.push([north, at(rings - 1, j), at(rings - 1, j + 1)]);
+            for i in 0..rings - 1 {
+                triangles.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+                triangles.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+            }
+        }
+        TriMesh::new(positions, triangles)
+    }
+
     /// A square of 2 triangles in the z=0 plane (one boundary loop of 4 vertices).
     pub fn square() -> TriMesh {
         TriMesh::new(
