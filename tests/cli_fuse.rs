@@ -419,6 +419,18 @@ fn coarse_lower_jaw_band_crossing_the_root_peels_the_root() {
     );
 }
 
+/// A coarse upper jaw fused from the command line whose premolar 25 has a hole of half the
+/// margin's length that no cap clears until faces go with it, which grows it past the fill
+/// limit: it is filled all the same (the first round's choice), and every tooth is fused (25
+/// was lost: "2 boundary loops after repair") with no crossing added.
+#[test]
+fn coarse_upper_jaw_hole_grown_by_its_rim_is_filled() {
+    fused_without_band_crossings(
+        "coarse_upper_grown_hole",
+        &["--seed", "11", "--jaw", "upper", "--ios-export", "coarse"],
+    );
+}
+
 /// A rough lower jaw fused from the command line whose canine 43 has a hole no cap clears at
 /// first (its rim folds over it): the faces the caps cross are taken with the hole, round after
 /// round, until a cap is clear (more than 6 rounds, 43 faces); every tooth ends with no crossing

@@ -76,16 +76,26 @@ const RIM_ROUNDS: usize = 16;
 /// whichever clears first. Where every cap tried crosses some (a hole whose rim folds over it:
 /// scanner noise at a hole's edge), the faces crossed go with the hole (they lie over it) and
 /// the repair runs again, up to 16 times; what is still crossed then is counted
-/// (`crossing_caps`). Positions never move: a vertex only the removed faces used is dropped
-/// like any unused vertex.
+/// (`crossing_caps`). Taking faces grows a hole: the later rounds keep the first round's
+/// choices, so the margin stays the loop through the first round's margin and a hole it filled
+/// is filled however far it grew (a coarse crown's hole at 49 % of the margin's length grew to
+/// 72 % and was left open, the tooth lost), while a hole it left open for its size stays open.
+/// Positions never move: a vertex only the removed faces used is dropped like any unused vertex.
 pub fn repair_open_surface(
     mesh: &TriMesh,
     opts: &RepairOptions,
 ) -> (TriMesh, Vec<u32>, RepairReport) {
     let mut input = std::borrow::Cow::Borrowed(mesh);
     let mut removed = 0;
+    // Per input vertex, what the first round made of its loop (see [`Rim`]).
+    let mut rims: Vec<Rim> = Vec::new();
     for round in 0.. {
-        let (m, source, mut rep, crossed) = repair_once(&input, opts);
+        let holes = if round == 0 {
+            Holes::BySize(&mut rims)
+        } else {
+            Holes::AsFirst(&rims)
+        };
+        let (m, source, mut rep, crossed) = repair_once(&input, opts, holes);
         if crossed.is_empty() || round == RIM_ROUNDS {
             rep.rim_faces_removed = removed;
             return (m, source, rep);
@@ -108,11 +118,34 @@ pub fn repair_open_surface(
     unreachable!("the rounds end at RIM_ROUNDS")
 }
 
+/// What the first round of [`repair_open_surface`] made of an input vertex's boundary loop.
+#[derive(Clone, Copy, PartialEq)]
+enum Rim {
+    /// On no loop, or on a hole it filled.
+    Other,
+    /// On the margin.
+    Margin,
+    /// On a hole left open (too long to fill).
+    Open,
+}
+
+/// Which loops a pass of [`repair_open_surface`] fills.
+enum Holes<'a> {
+    /// Every loop but the longest (the margin) at most `max_hole_fraction` of its length; what
+    /// was made of each loop is recorded per input vertex (the first round).
+    BySize(&'a mut Vec<Rim>),
+    /// As the first round chose: the margin is the loop with the most of its margin's vertices,
+    /// a loop through a hole it left open stays open, every other loop is filled (the later
+    /// rounds, whose holes grew as faces went with them).
+    AsFirst(&'a [Rim]),
+}
+
 /// One pass of [`repair_open_surface`], also returning the faces of the repaired mesh that its
 /// caps cross (ascending; empty when every cap is clear).
 fn repair_once(
     mesh: &TriMesh,
     opts: &RepairOptions,
+    holes: Holes,
 ) -> (TriMesh, Vec<u32>, RepairReport, Vec<u32>) {
     let mut rep = RepairReport::default();
     let n = mesh.positions.len();
@@ -166,7 +199,14 @@ fn repair_once(
     }
     // 6. Fill small holes (every loop but the longest, up to the size limit).
     let crossed = if opts.max_hole_fraction > 0.0 {
-        fill_small_holes(&mut m, &mut source, same_topo.as_ref(), opts, &mut rep)
+        fill_small_holes(
+            &mut m,
+            &mut source,
+            same_topo.as_ref(),
+            opts,
+            holes,
+            &mut rep,
+        )
     } else {
         Vec::new()
     };
@@ -260,17 +300,18 @@ fn two_faces_per_edge(faces: Vec<[u32; 3]>, n: usize, rep: &mut RepairReport) ->
     kept
 }
 
-/// Step 6 of [`repair_open_surface`]: every boundary loop but the longest (the margin) whose
-/// perimeter is at most `opts.max_hole_fraction` of the margin's is capped
-/// ([`super::hole_cap::cap_hole`]: a fan around a new vertex at its centroid where that crosses
-/// nothing, else another cap; `source` gets `u32::MAX` for a new vertex); `same_topo` is `m`'s
-/// edge topology when still valid. Counted in `rep`. Returns the faces of `m` crossed by caps
-/// (ascending), where no cap tried was clear.
+/// Step 6 of [`repair_open_surface`]: the loops `holes` says (first round: every boundary loop
+/// but the longest, the margin, whose perimeter is at most `opts.max_hole_fraction` of the
+/// margin's) are capped ([`super::hole_cap::cap_hole`]: a fan around a new vertex at its
+/// centroid where that crosses nothing, else another cap; `source` gets `u32::MAX` for a new
+/// vertex); `same_topo` is `m`'s edge topology when still valid. Counted in `rep`. Returns the
+/// faces of `m` crossed by caps (ascending), where no cap tried was clear.
 fn fill_small_holes(
     m: &mut TriMesh,
     source: &mut Vec<u32>,
     same_topo: Option<&EdgeTopology>,
     opts: &RepairOptions,
+    holes: Holes,
     rep: &mut RepairReport,
 ) -> Vec<u32> {
     let mut crossed = Vec::new();
@@ -289,8 +330,57 @@ fn fill_small_holes(
                 .sum()
         })
         .collect();
-    // The margin: the longest loop (first of equals).
-    let margin = (0..loops.len()).max_by(|&a, &b| perims[a].total_cmp(&perims[b]).then(b.cmp(&a)));
+    // The margin: the longest loop (first of equals); in the later rounds the loop through most
+    // of the first round's margin (the longest, first of equals, among those).
+    let first: Option<&[Rim]> = match &holes {
+        Holes::BySize(_) => None,
+        Holes::AsFirst(rims) => Some(rims),
+    };
+    let rim_of = |v: u32| {
+        first
+            .and_then(|rims| rims.get(source[v as usize] as usize))
+            .copied()
+            .unwrap_or(Rim::Other)
+    };
+    let on_margin = |l: &[u32]| l.iter().filter(|&&v| rim_of(v) == Rim::Margin).count();
+    let margin = (0..loops.len()).max_by(|&a, &b| {
+        on_margin(&loops[a])
+            .cmp(&on_margin(&loops[b]))
+            .then(perims[a].total_cmp(&perims[b]))
+            .then(b.cmp(&a))
+    });
+    let filled: Vec<bool> = (0..loops.len())
+        .map(|i| {
+            let Some(mi) = margin.filter(|&mi| mi != i) else {
+                return false;
+            };
+            match first {
+                None => perims[i] <= opts.max_hole_fraction * perims[mi],
+                Some(_) => !loops[i].iter().any(|&v| rim_of(v) == Rim::Open),
+            }
+        })
+        .collect();
+    if let Holes::BySize(rims) = holes {
+        let n = source
+            .iter()
+            .filter(|&&s| s != u32::MAX)
+            .max()
+            .map_or(0, |&s| s as usize + 1);
+        rims.clear();
+        rims.resize(n, Rim::Other);
+        for (i, l) in loops.iter().enumerate() {
+            let rim = if Some(i) == margin {
+                Rim::Margin
+            } else if filled[i] {
+                continue;
+            } else {
+                Rim::Open
+            };
+            for &v in l {
+                rims[source[v as usize] as usize] = rim;
+            }
+        }
+    }
     // Built once a hole is to be capped: the topology when the caller's is stale, and the grid
     // of the faces before any cap. Caps of other holes never join two vertices of this one
     // (holes sharing vertices are bow-ties, split in step 5), so the topology stays valid for
@@ -298,9 +388,9 @@ fn fill_small_holes(
     let mut built: Option<EdgeTopology> = None;
     let mut grid: Option<TriangleGrid> = None;
     let mut caps: Vec<std::ops::Range<usize>> = Vec::new();
-    if let Some(mi) = margin {
+    if margin.is_some() {
         for (i, l) in loops.iter().enumerate() {
-            if i == mi || perims[i] > opts.max_hole_fraction * perims[mi] {
+            if !filled[i] {
                 continue;
             }
             let topo = match same_topo {

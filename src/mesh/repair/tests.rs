@@ -373,3 +373,76 @@ fn caps_of_different_holes_crossing_are_counted() {
         "one cap's own faces"
     );
 }
+
+/// A hole the first round fills stays filled however far the faces taken with it grow it: on
+/// folded holed grids repaired with the fill limit just above the hole's share of the margin
+/// (a third), every grid whose hole is within the limit ends as one disk bounded by the grid's
+/// own border. Taking faces grows a hole past the limit on
+/// many of them: the later rounds used to leave those open (two loops: the crown lost).
+#[test]
+fn a_hole_grown_by_taking_faces_is_still_filled() {
+    let mut rng = crate::phantom::rng::Rng::new(23);
+    let opts = RepairOptions {
+        max_hole_fraction: 0.36,
+    };
+    let perimeter = |m: &TriMesh, l: &[u32]| -> f64 {
+        (0..l.len())
+            .map(|i| {
+                (m.positions[l[i] as usize] - m.positions[l[(i + 1) % l.len()] as usize]).length()
+            })
+            .sum()
+    };
+    let (mut within, mut grown) = (0, 0);
+    for case in 0..400 {
+        let m = jittered_holed_grid(&mut rng, 0.7);
+        let loops = boundary_loops(&m);
+        let (outer, hole) = (&loops[0], &loops[1]);
+        assert_eq!(outer.len(), 24, "case {case}");
+        if perimeter(&m, hole) > opts.max_hole_fraction * perimeter(&m, outer) {
+            continue;
+        }
+        within += 1;
+        let (r, src, rep) = repair_open_surface(&m, &opts);
+        let after = boundary_loops(&r);
+        assert_eq!(after.len(), 1, "case {case}: {rep:?}");
+        // The margin is the grid's border, or most of it: where the faces taken joined the hole
+        // to it the hole's rim is a notch of it, and where they cut a corner off, the corner
+        // went as an island (counted).
+        let border: Vec<u32> = after[0].iter().map(|&v| src[v as usize]).collect();
+        let on_border = outer.iter().filter(|v| border.contains(v)).count();
+        assert!(
+            2 * on_border > outer.len(),
+            "case {case}: the margin {border:?} against the grid's border {outer:?}, {rep:?}"
+        );
+        // The hole as it was left once the faces went: past the limit on some grids.
+        if rep.rim_faces_removed > 0 {
+            let taken: Vec<[u32; 3]> = r
+                .triangles
+                .iter()
+                .map(|t| sorted_corners(t.map(|v| src[v as usize])))
+                .collect();
+            let left = TriMesh::new(
+                m.positions.clone(),
+                m.triangles
+                    .iter()
+                    .copied()
+                    .filter(|&t| taken.contains(&sorted_corners(t)))
+                    .collect(),
+            );
+            let loops = boundary_loops(&left);
+            let longest = loops
+                .iter()
+                .map(|l| perimeter(&left, l))
+                .fold(0.0, f64::max);
+            grown += usize::from(
+                loops
+                    .iter()
+                    .map(|l| perimeter(&left, l))
+                    .any(|p| p < longest && p > opts.max_hole_fraction * longest),
+            );
+        }
+    }
+    println!("{within} of 400 grids within the limit, {grown} grew past it");
+    assert!(within >= 100, "{within} grids within the limit");
+    assert!(grown >= 5, "{grown} holes grew past the limit");
+}
