@@ -419,6 +419,19 @@ fn coarse_lower_jaw_band_crossing_the_root_peels_the_root() {
     );
 }
 
+/// A coarse lower jaw fused from the command line whose incisor 41's margin plane is tilted 62°
+/// from its CBCT tooth's long axis: the cut is made about the long axis, and the crown's
+/// orientation is judged about that axis too (judged about the tilted one, the crown was
+/// flipped against its root: "CBCT root and IOS crown have opposite orientations after the
+/// cut", the tooth lost); every tooth is fused with no crossing added.
+#[test]
+fn coarse_lower_jaw_tilted_margin_keeps_its_orientation() {
+    fused_without_band_crossings(
+        "coarse_lower_tilted_margin",
+        &["--seed", "21", "--jaw", "lower", "--ios-export", "coarse"],
+    );
+}
+
 /// A coarse upper jaw fused from the command line whose premolar 25 has a hole of half the
 /// margin's length that no cap clears until faces go with it, which grows it past the fill
 /// limit: it is filled all the same (the first round's choice), and every tooth is fused (25

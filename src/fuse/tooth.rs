@@ -281,6 +281,21 @@ fn cut_inner(
     // Crown removal.
     let margin_pts = margin_pts_of(&crown, &margin);
     let (frame, rc) = cut_root(&root_in, &margin_pts, frame, opts, &mut warnings)?;
+    // Where the cut was made about the CBCT tooth's long axis instead (the margin's plane tilted
+    // far off it), the crown's orientation is judged again about that axis: about the tilted
+    // one the margin's winding can come out either way (a scalloped incisor's margin was read
+    // as inward, its crown flipped against its root and the tooth lost).
+    if stitch::param::winding(&frame, &margin_pts) < 0.0 {
+        crown.flip();
+        margin.reverse();
+        let flipped = "IOS crown was inward-oriented; flipped";
+        match warnings.iter().position(|w| w == flipped) {
+            Some(i) => {
+                warnings.remove(i);
+            }
+            None => warnings.push(flipped.into()),
+        }
+    }
     let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
     let root_dirs = loop_dirs(&rc.root, &rc.cut_loop, frame.axis);
     let chords = loop_chords(&crown, &margin, BandVertex::Upper)
