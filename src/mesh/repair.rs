@@ -197,7 +197,8 @@ fn repair_once(
     if rep.split_vertices > 0 {
         same_topo = None;
     }
-    // 6. Fill small holes (every loop but the longest, up to the size limit).
+    // 6. Fill small holes (first round: every loop but the longest, up to the size limit; the
+    // later rounds as the first chose).
     let crossed = if opts.max_hole_fraction > 0.0 {
         fill_small_holes(
             &mut m,
