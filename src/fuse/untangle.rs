@@ -6,8 +6,8 @@
 //! ([`triangles_intersect`](crate::mesh_check::triangles_intersect)) against the faces around it: a move is kept only if its star crosses
 //! fewer faces, or as many and has a larger smallest angle, and no star face turns over. Loop
 //! vertices (IOS margin, CBCT cut) never move. The exact tests that score candidates are
-//! budgeted ([`TESTS_PER_BAND_FACE`] per band face, [`TESTS_PER_TANGLED_BAND_FACE`] on a band
-//! tangled from the start): on a band that cannot be untangled the
+//! budgeted ([`TESTS_PER_BAND_FACE`] per band face, a tenth of that on a band tangled from the
+//! start): on a band that cannot be untangled the
 //! rounds stop when it is spent, so the work stays proportional to the band whatever the input.
 
 mod moves;
@@ -42,16 +42,16 @@ pub struct UntangleReport {
 pub const TESTS_PER_BAND_FACE: usize = 2000;
 
 /// Exact tests per band face allowed instead for a tangled band: one whose faces cross others
-/// in more pairs than an eighth of its faces before any move ([`TANGLED_SHARE`]). Such a band
+/// in more pairs than an eighth of its faces before any move (`TANGLED_SHARE`). Such a band
 /// is not untangled whole, whatever the budget: the builds that follow trim the crown faces it
 /// crosses and lay the band anew. Spending the full budget on each of them made a coarse molar
 /// (bands crossing in 1 400-2 200 pairs, 65 builds) hold its jaw's fuse for 11.8 s and still
-/// end with 4 pairs; with this budget the jaw takes 4.0 s and the molar ends with none. The
-/// foreign jaws' bands cross in under an eighth.
-pub const TESTS_PER_TANGLED_BAND_FACE: usize = 200;
+/// end with 4 pairs; with this budget the jaw takes 4.0 s and the molar ends with none (the
+/// foreign jaws' fused meshes are unchanged).
+const TESTS_PER_TANGLED_BAND_FACE: usize = 200;
 
 /// A band is tangled when its crossing pairs before any move exceed its faces divided by this.
-pub const TANGLED_SHARE: usize = 8;
+const TANGLED_SHARE: usize = 8;
 
 /// Whether a corner angle of `a, b, c` is under the angle whose cosine is `cos_limit` (no
 /// inverse cosine: the test runs on every band face).
