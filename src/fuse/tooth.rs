@@ -255,17 +255,9 @@ fn cut_inner(
     }
     let mut margin = loops.into_iter().next().unwrap_or_default();
     let crown_centroid = crate::geom::centroid(&crown.positions).unwrap_or(DVec3::ZERO);
-    let margin_pts: Vec<DVec3> = margin
-        .iter()
-        .map(|&v| crown.positions[v as usize])
-        .collect();
-    let frame = ToothFrame::from_margin(&margin_pts, crown_centroid)?;
-    // The crown lies to the left of its margin seen from outside: counter-clockwise about the
-    // axis. If not, the crown is inward-oriented: flip it (positions untouched).
-    if stitch::param::winding(&frame, &margin_pts) < 0.0 {
-        crown.flip();
-        margin.reverse();
-        warnings.push("IOS crown was inward-oriented; flipped".into());
+    let frame = ToothFrame::from_margin(&margin_pts_of(&crown, &margin), crown_centroid)?;
+    if outward(&frame, &mut crown, &mut margin) {
+        warnings.push(FLIPPED.into());
     }
     let ios_vertex = rep_src;
     let kept_ios = ios_vertex.iter().filter(|&&s| s != u32::MAX).count();
@@ -285,15 +277,12 @@ fn cut_inner(
     // far off it), the crown's orientation is judged again about that axis: about the tilted
     // one the margin's winding can come out either way (a scalloped incisor's margin was read
     // as inward, its crown flipped against its root and the tooth lost).
-    if stitch::param::winding(&frame, &margin_pts) < 0.0 {
-        crown.flip();
-        margin.reverse();
-        let flipped = "IOS crown was inward-oriented; flipped";
-        match warnings.iter().position(|w| w == flipped) {
+    if outward(&frame, &mut crown, &mut margin) {
+        match warnings.iter().position(|w| w == FLIPPED) {
             Some(i) => {
                 warnings.remove(i);
             }
-            None => warnings.push(flipped.into()),
+            None => warnings.push(FLIPPED.into()),
         }
     }
     let crown_dirs = loop_dirs(&crown, &margin, frame.axis);
@@ -415,6 +404,21 @@ fn cut_root(
 fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
     let w = stitch::param::winding(frame, &margin_pts_of(&rc.root, &rc.cut_loop));
     stitch::param::once_around(w).is_some()
+}
+
+/// The warning of a crown found inward-oriented and flipped.
+const FLIPPED: &str = "IOS crown was inward-oriented; flipped";
+
+/// Makes `crown` lie to the left of its margin seen from outside (the margin counter-clockwise
+/// about `frame`'s axis): where it does not, the crown is inward-oriented and is flipped, its
+/// margin reversed (positions untouched). Whether it was flipped.
+fn outward(frame: &ToothFrame, crown: &mut TriMesh, margin: &mut [u32]) -> bool {
+    let flip = stitch::param::winding(frame, &margin_pts_of(crown, margin)) < 0.0;
+    if flip {
+        crown.flip();
+        margin.reverse();
+    }
+    flip
 }
 
 pub(super) fn margin_pts_of(mesh: &TriMesh, margin: &[u32]) -> Vec<DVec3> {

@@ -12,6 +12,7 @@ use super::vertex_sort::sort_by_vertex;
 use super::{TriMesh, sorted_corners};
 use crate::mesh_check::{TriangleGrid, triangles_intersect};
 use glam::DVec3;
+use hole_choice::{Holes, Rim};
 
 /// Options of [`repair_open_surface`].
 #[derive(Clone, Copy, Debug)]
@@ -116,28 +117,6 @@ pub fn repair_open_surface(
         input = std::borrow::Cow::Owned(TriMesh::new(mesh.positions.clone(), kept));
     }
     unreachable!("the rounds end at RIM_ROUNDS")
-}
-
-/// What the first round of [`repair_open_surface`] made of an input vertex's boundary loop.
-#[derive(Clone, Copy, PartialEq)]
-enum Rim {
-    /// On no loop, or on a hole it filled.
-    Other,
-    /// On the margin.
-    Margin,
-    /// On a hole left open (too long to fill).
-    Open,
-}
-
-/// Which loops a pass of [`repair_open_surface`] fills.
-enum Holes<'a> {
-    /// Every loop but the longest (the margin) at most `max_hole_fraction` of its length; what
-    /// was made of each loop is recorded per input vertex (the first round).
-    BySize(&'a mut Vec<Rim>),
-    /// As the first round chose: the margin is the loop with the most of its margin's vertices,
-    /// a loop through a hole it left open stays open, every other loop is filled (the later
-    /// rounds, whose holes grew as faces went with them).
-    AsFirst(&'a [Rim]),
 }
 
 /// One pass of [`repair_open_surface`], also returning the faces of the repaired mesh that its
@@ -331,57 +310,7 @@ fn fill_small_holes(
                 .sum()
         })
         .collect();
-    // The margin: the longest loop (first of equals); in the later rounds the loop through most
-    // of the first round's margin (the longest, first of equals, among those).
-    let first: Option<&[Rim]> = match &holes {
-        Holes::BySize(_) => None,
-        Holes::AsFirst(rims) => Some(rims),
-    };
-    let rim_of = |v: u32| {
-        first
-            .and_then(|rims| rims.get(source[v as usize] as usize))
-            .copied()
-            .unwrap_or(Rim::Other)
-    };
-    let on_margin = |l: &[u32]| l.iter().filter(|&&v| rim_of(v) == Rim::Margin).count();
-    let margin = (0..loops.len()).max_by(|&a, &b| {
-        on_margin(&loops[a])
-            .cmp(&on_margin(&loops[b]))
-            .then(perims[a].total_cmp(&perims[b]))
-            .then(b.cmp(&a))
-    });
-    let filled: Vec<bool> = (0..loops.len())
-        .map(|i| {
-            let Some(mi) = margin.filter(|&mi| mi != i) else {
-                return false;
-            };
-            match first {
-                None => perims[i] <= opts.max_hole_fraction * perims[mi],
-                Some(_) => !loops[i].iter().any(|&v| rim_of(v) == Rim::Open),
-            }
-        })
-        .collect();
-    if let Holes::BySize(rims) = holes {
-        let n = source
-            .iter()
-            .filter(|&&s| s != u32::MAX)
-            .max()
-            .map_or(0, |&s| s as usize + 1);
-        rims.clear();
-        rims.resize(n, Rim::Other);
-        for (i, l) in loops.iter().enumerate() {
-            let rim = if Some(i) == margin {
-                Rim::Margin
-            } else if filled[i] {
-                continue;
-            } else {
-                Rim::Open
-            };
-            for &v in l {
-                rims[source[v as usize] as usize] = rim;
-            }
-        }
-    }
+    let filled = hole_choice::filled_loops(&loops, &perims, source, opts, holes);
     // Built once a hole is to be capped: the topology when the caller's is stale, and the grid
     // of the faces before any cap. Caps of other holes never join two vertices of this one
     // (holes sharing vertices are bow-ties, split in step 5), so the topology stays valid for
@@ -389,33 +318,31 @@ fn fill_small_holes(
     let mut built: Option<EdgeTopology> = None;
     let mut grid: Option<TriangleGrid> = None;
     let mut caps: Vec<std::ops::Range<usize>> = Vec::new();
-    if margin.is_some() {
-        for (i, l) in loops.iter().enumerate() {
-            if !filled[i] {
-                continue;
-            }
-            let topo = match same_topo {
-                Some(t) => t,
-                None => built.get_or_insert_with(|| EdgeTopology::new(m)),
-            };
-            let grid = grid.get_or_insert_with(|| TriangleGrid::new(m, 0.0));
-            let surface = super::hole_cap::Surface { topo, grid };
-            let cap = super::hole_cap::cap_hole(m, &surface, l);
-            if let Some(p) = cap.apex {
-                m.positions.push(p);
-                source.push(u32::MAX);
-                rep.added_vertices += 1;
-            }
-            let first = m.triangles.len();
-            m.triangles.extend_from_slice(&cap.faces);
-            if cap.crossings > 0 {
-                rep.crossing_caps += 1;
-                crossed.extend_from_slice(&cap.crossed);
-            } else {
-                caps.push(first..m.triangles.len());
-            }
-            rep.filled_holes += 1;
+    for (i, l) in loops.iter().enumerate() {
+        if !filled[i] {
+            continue;
         }
+        let topo = match same_topo {
+            Some(t) => t,
+            None => built.get_or_insert_with(|| EdgeTopology::new(m)),
+        };
+        let grid = grid.get_or_insert_with(|| TriangleGrid::new(m, 0.0));
+        let surface = super::hole_cap::Surface { topo, grid };
+        let cap = super::hole_cap::cap_hole(m, &surface, l);
+        if let Some(p) = cap.apex {
+            m.positions.push(p);
+            source.push(u32::MAX);
+            rep.added_vertices += 1;
+        }
+        let first = m.triangles.len();
+        m.triangles.extend_from_slice(&cap.faces);
+        if cap.crossings > 0 {
+            rep.crossing_caps += 1;
+            crossed.extend_from_slice(&cap.crossed);
+        } else {
+            caps.push(first..m.triangles.len());
+        }
+        rep.filled_holes += 1;
     }
     rep.crossing_caps += caps_crossing_each_other(m, &caps);
     crossed.sort_unstable();
@@ -636,6 +563,8 @@ fn split_bow_ties(m: &mut TriMesh, source: &mut Vec<u32>, topo: Option<&EdgeTopo
     }
     made
 }
+
+mod hole_choice;
 
 #[cfg(test)]
 mod tests;
