@@ -47,6 +47,31 @@ fn ply_round_trip_is_bitwise_in_every_encoding() {
 }
 
 #[test]
+fn ply_file_is_streamed_bytewise_as_written_in_memory_and_checked_before_it_is_touched() {
+    let d = scratch("ply_stream");
+    // Over 4 MB of payload: written to the file in several chunks.
+    let m = grid(300, 1);
+    let lab = labels(m.vertex_count());
+    for enc in [PlyEncoding::BinaryLittleEndian, PlyEncoding::Ascii] {
+        let p = d.join(format!("big_{enc:?}.ply"));
+        write_mesh_with(&p, &m, &[("label", &lab)], enc).unwrap();
+        let mut mem = Vec::new();
+        toothfuse::io::write_ply(&mut mem, &m, &[("label", &lab)], enc).unwrap();
+        assert!(mem.len() > 4 << 20, "{enc:?}: {} bytes", mem.len());
+        assert!(std::fs::read(&p).unwrap() == mem, "{enc:?}");
+    }
+    // A refused property (bad name, wrong length) or face index leaves an existing file as it was.
+    let p = d.join("kept.ply");
+    std::fs::write(&p, b"not to be lost").unwrap();
+    assert!(write_mesh(&p, &m, &[("a label", &lab)]).is_err());
+    assert!(write_mesh(&p, &m, &[("label", &lab[1..])]).is_err());
+    let mut bad = m.clone();
+    bad.triangles[7][1] = bad.vertex_count() as u32;
+    assert!(write_mesh(&p, &bad, &[]).is_err());
+    assert_eq!(std::fs::read(&p).unwrap(), b"not to be lost");
+}
+
+#[test]
 fn ply_ascii_variants_quads_face_labels_float_labels() {
     let d = scratch("ply_ascii");
     let text = "ply\nformat ascii 1.0\ncomment quad + triangle, an edge element, a colour\nelement vertex 5\n\

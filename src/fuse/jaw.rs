@@ -82,10 +82,19 @@ pub fn cut_jaw(
     transforms: &BTreeMap<u8, ToothTransforms>,
     opts: &FuseOptions,
 ) -> Result<CutJaw> {
-    let crowns = ios_crowns(ios)?;
+    Ok(cut_crowns(&ios_crowns(ios)?, cbct, transforms, opts))
+}
+
+/// [`cut_jaw`] on the jaw's crowns as [`ios_crowns`] gives them.
+pub(crate) fn cut_crowns(
+    crowns: &BTreeMap<u8, TriMesh>,
+    cbct: &BTreeMap<u8, TriMesh>,
+    transforms: &BTreeMap<u8, ToothTransforms>,
+    opts: &FuseOptions,
+) -> CutJaw {
     let mut jaw = CutJaw::default();
     let mut work = Vec::new();
-    for (&fdi, crown) in &crowns {
+    for (&fdi, crown) in crowns {
         let Some(tooth) = cbct.get(&fdi) else {
             jaw.ios_only.push(fdi);
             continue;
@@ -135,7 +144,7 @@ pub fn cut_jaw(
             (*fdi, cbct[fdi].transformed(&to_output))
         })
         .collect();
-    Ok(jaw)
+    jaw
 }
 
 /// The stitching stage of [`fuse_jaw`]: runs [`stitch_tooth`] on every cut tooth (on up to 4
@@ -150,6 +159,34 @@ pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
         |c| c.margin.len(),
         |c| (c.fdi(), stitch_tooth(c, opts)),
     );
+    merged(results, cut, opts)
+}
+
+/// [`stitch_jaw`] on a cut it may consume: each cut tooth is dropped once stitched, so the cut
+/// teeth and the fused ones are not all held at once (the same result).
+pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw {
+    let teeth = std::mem::take(&mut cut.teeth);
+    let work: Vec<(usize, std::sync::Mutex<Option<CutTooth>>)> = teeth
+        .into_values()
+        .map(|c| (c.margin.len(), std::sync::Mutex::new(Some(c))))
+        .collect();
+    let results = crate::par::map_ordered_by_cost(
+        &work,
+        |w| w.0,
+        |w| {
+            let c =
+                w.1.lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .take()
+                    .expect("each cut tooth is stitched once");
+            (c.fdi(), stitch_tooth(&c, opts))
+        },
+    );
+    merged(results, &cut, opts)
+}
+
+/// The fused jaw of the stitching `results` (in FDI order) of `cut`'s teeth.
+fn merged(results: Vec<(u8, Result<FusedTooth>)>, cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
     let mut jaw = FusedJaw {
         ios_only: cut.ios_only.clone(),
         cbct_only: cut.cbct_only.clone(),
@@ -198,5 +235,8 @@ pub fn fuse_jaw(
     transforms: &BTreeMap<u8, ToothTransforms>,
     opts: &FuseOptions,
 ) -> Result<FusedJaw> {
-    Ok(stitch_jaw(&cut_jaw(ios, cbct, transforms, opts)?, opts))
+    Ok(stitch_jaw_owned(
+        cut_jaw(ios, cbct, transforms, opts)?,
+        opts,
+    ))
 }

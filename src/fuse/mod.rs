@@ -19,6 +19,7 @@ pub mod untangle;
 
 pub use assembly::stitch_tooth;
 pub use jaw::{CutJaw, FusedJaw, ToothTransforms, cut_jaw, fuse_jaw, ios_crowns, stitch_jaw};
+pub(crate) use jaw::{cut_crowns, stitch_jaw_owned};
 pub use quality::ToothQuality;
 pub use tooth::{CutTooth, FusedTooth, cut_tooth, fuse_tooth};
 

@@ -157,7 +157,15 @@ pub fn write_mesh_with(
     }
     let mut bytes = Vec::new();
     match format {
-        Format::Ply => write_ply(&mut bytes, mesh, vertex_int_props, ply_encoding)?,
+        Format::Ply => {
+            // Streamed to the file once checked: a large mesh is not first copied into memory.
+            ply::check_ply(mesh, vertex_int_props)?;
+            let cannot = |e: std::io::Error| file_err(path, format!("cannot write: {e}"));
+            let file = std::fs::File::create(path).map_err(cannot)?;
+            let mut w = std::io::BufWriter::new(file);
+            write_ply(&mut w, mesh, vertex_int_props, ply_encoding)?;
+            return std::io::Write::flush(&mut w).map_err(cannot);
+        }
         Format::Stl => write_stl(&mut bytes, mesh)?,
         Format::Obj => obj::write_obj(&mut bytes, mesh)?,
         Format::Vtp => write_vtp(

@@ -335,15 +335,10 @@ fn list_i64(p: Option<&Property>, out: &mut Vec<i64>) -> bool {
     true
 }
 
-/// Writes a PLY: `x, y, z` as double, one `int` property per entry of `vertex_int_props`, and
-/// faces as `vertex_indices` (uchar count, int indices). Written directly (the header is
-/// simple and the payload is a flat record per element), read back by `ply-rs-bw` in tests.
-pub fn write_ply(
-    out: &mut impl Write,
-    mesh: &TriMesh,
-    vertex_int_props: &[(&str, &[i32])],
-    encoding: PlyEncoding,
-) -> Result<()> {
+/// What [`write_ply`] checks before it writes anything: face indices within the vertices, and
+/// property names that are non-empty, without spaces, not `x`/`y`/`z`, used once, each with one
+/// value per vertex.
+pub(crate) fn check_ply(mesh: &TriMesh, vertex_int_props: &[(&str, &[i32])]) -> Result<()> {
     super::check_mesh_indices(mesh)?;
     for (k, (name, values)) in vertex_int_props.iter().enumerate() {
         let bad_name = name.is_empty() || name.chars().any(|c| c.is_whitespace());
@@ -363,14 +358,28 @@ pub fn write_ply(
             )));
         }
     }
+    Ok(())
+}
+
+/// Writes a PLY: `x, y, z` as double, one `int` property per entry of `vertex_int_props`, and
+/// faces as `vertex_indices` (uchar count, int indices). Written directly (the header is
+/// simple and the payload is a flat record per element), read back by `ply-rs-bw` in tests.
+pub fn write_ply(
+    out: &mut impl Write,
+    mesh: &TriMesh,
+    vertex_int_props: &[(&str, &[i32])],
+    encoding: PlyEncoding,
+) -> Result<()> {
+    check_ply(mesh, vertex_int_props)?;
     let format = match encoding {
         PlyEncoding::BinaryLittleEndian => "binary_little_endian",
         PlyEncoding::BinaryBigEndian => "binary_big_endian",
         PlyEncoding::Ascii => "ascii",
     };
-    let mut b: Vec<u8> = Vec::with_capacity(
-        256 + mesh.vertex_count() * (24 + 4 * vertex_int_props.len()) + mesh.face_count() * 13,
-    );
+    // Written in chunks of about `CHUNK` bytes: a large mesh is never held twice in memory.
+    const CHUNK: usize = 1 << 20;
+    let mut b: Vec<u8> = Vec::with_capacity(CHUNK + 4096);
+    let io_err = |e: std::io::Error| Error::Io(format!("writing PLY: {e}"));
     let _ = write!(
         b,
         "ply\nformat {format} 1.0\ncomment written by toothfuse (units: mm)\n\
@@ -415,6 +424,10 @@ pub fn write_ply(
                 b.extend_from_slice(&i32b(v[i]));
             }
         }
+        if b.len() >= CHUNK {
+            out.write_all(&b).map_err(io_err)?;
+            b.clear();
+        }
     }
     for t in &mesh.triangles {
         if encoding == PlyEncoding::Ascii {
@@ -425,7 +438,10 @@ pub fn write_ply(
                 b.extend_from_slice(&i32b(v as i32));
             }
         }
+        if b.len() >= CHUNK {
+            out.write_all(&b).map_err(io_err)?;
+            b.clear();
+        }
     }
-    out.write_all(&b)
-        .map_err(|e| Error::Io(format!("writing PLY: {e}")))
+    out.write_all(&b).map_err(io_err)
 }

@@ -125,7 +125,7 @@ pub fn fuse(
 ) -> Result<PipelineResult> {
     let t0 = Instant::now();
     let crowns = ios_crowns(ios)?;
-    run(t0, ios, &crowns, cbct, opts)
+    run(t0, crowns, cbct, opts)
 }
 
 /// One-call fuse of per-tooth IOS crowns (open meshes by FDI, IOS frame) with CBCT teeth; see
@@ -139,7 +139,8 @@ pub fn fuse_crowns(
     let t0 = Instant::now();
     let jaw = merge_crowns(crowns)?;
     let split = ios_crowns(&jaw)?;
-    run(t0, &jaw, &split, cbct, opts)
+    drop(jaw);
+    run(t0, split, cbct, opts)
 }
 
 /// Cut and stitch only, with an existing registration (e.g. one made earlier by
@@ -209,23 +210,25 @@ fn merge_crowns(crowns: &BTreeMap<u8, TriMesh>) -> Result<LabeledMesh> {
     Ok(jaw)
 }
 
+/// Registers the jaw's `crowns` ([`ios_crowns`]) and fuses them: the crowns are dropped once
+/// cut and each cut tooth once stitched, so no stage's data outlives its use.
 fn run(
     t0: Instant,
-    ios: &LabeledMesh,
-    crowns: &BTreeMap<u8, TriMesh>,
+    crowns: BTreeMap<u8, TriMesh>,
     cbct: &BTreeMap<u8, TriMesh>,
     opts: &PipelineOptions,
 ) -> Result<PipelineResult> {
     let mut ro = opts.register.clone();
     ro.frame = opts.frame;
     let t1 = Instant::now();
-    let registration = register(crowns, cbct, &ro)?;
+    let registration = register(&crowns, cbct, &ro)?;
     let register_ms = ms(t1);
     let t2 = Instant::now();
-    let cut = cut_jaw(ios, cbct, &transforms_of(&registration), &opts.fuse)?;
+    let cut = crate::fuse::cut_crowns(&crowns, cbct, &transforms_of(&registration), &opts.fuse);
+    drop(crowns);
     let cut_ms = ms(t2);
     let t3 = Instant::now();
-    let jaw = stitch_jaw(&cut, &opts.fuse);
+    let jaw = crate::fuse::stitch_jaw_owned(cut, &opts.fuse);
     let stitch_ms = ms(t3);
     Ok(PipelineResult {
         registration,
