@@ -46,6 +46,16 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // One malloc arena for the process instead of one per thread: the worker threads free
+    // large short-lived buffers (band sampling, crown copies) that a per-thread arena keeps
+    // mapped. `toothfuse fuse` on a foreign jaw: maximum RSS 151-157 MB -> 111-115 MB, wall
+    // time within the runs' spread. The library leaves its host's allocator as it is.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: a glibc tuning call at start-up, before any thread exists; it changes no memory
+    // already allocated.
+    unsafe {
+        libc::mallopt(libc::M_ARENA_MAX, 1);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo::run(&a),
