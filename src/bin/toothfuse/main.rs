@@ -46,15 +46,19 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // One malloc arena for the process instead of one per thread: the worker threads free
-    // large short-lived buffers (band sampling, crown copies) that a per-thread arena keeps
-    // mapped. `toothfuse fuse` on a foreign jaw: maximum RSS 151-157 MB -> 111-115 MB, wall
-    // time within the runs' spread. The library leaves its host's allocator as it is.
+    // Two malloc arenas for the process instead of glibc's default of eight per core: each
+    // worker thread's arena keeps mapped the large short-lived buffers it freed (band sampling,
+    // crown copies). `toothfuse fuse`, maximum RSS and wall time over 4 runs: a foreign jaw
+    // 152-161 MB -> 132-136 MB, a rough phantom jaw 91-94 MB -> 80-83 MB, the same times (one
+    // arena: 114-118 MB and 69-71 MB, but ~3 % slower on the rough jaw). The library leaves its
+    // host's allocator as it is; a `MALLOC_ARENA_MAX` set in the environment is left to glibc.
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: a glibc tuning call at start-up, before any thread exists; it changes no memory
-    // already allocated.
-    unsafe {
-        libc::mallopt(libc::M_ARENA_MAX, 1);
+    if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
+        // SAFETY: a glibc tuning call at start-up, before any thread exists; it changes no
+        // memory already allocated.
+        unsafe {
+            libc::mallopt(libc::M_ARENA_MAX, 2);
+        }
     }
     let cli = Cli::parse();
     let result = match cli.command {
