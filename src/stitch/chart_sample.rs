@@ -114,13 +114,38 @@ fn seg_dist2(p: [f64; 2], a: [f64; 2], b: [f64; 2], period: f64) -> f64 {
     dx * dx + dy * dy
 }
 
-/// The candidate lattice by column: column `k` at `x = (k + ½)·cx`, rows at `y = (j + shift)·step`
-/// (odd columns shifted half a step), each column's candidates as runs of consecutive rows.
+/// One run of a lattice column: the candidates between a loop crossing above and the next one
+/// below, consecutive rows with consecutive creation indices. Its candidates' positions and
+/// sizes follow from it, so they are not stored one by one.
+#[derive(Clone, Copy)]
+struct Run {
+    col: u32,
+    /// First row and the creation index of its candidate.
+    j0: i64,
+    first: u32,
+    /// Number of rows.
+    n: u32,
+    /// Height of the crossing below and the span up to the one above.
+    bottom: f64,
+    h: f64,
+    /// Whether the crossing above, and the one below, is the margin's (else the cut's).
+    top_up: bool,
+    bottom_up: bool,
+}
+
+/// The candidate lattice: column `k` at `x = (k + ½)·cx`, rows at `y = (j + shift)·step` (odd
+/// columns shifted half a step), each column's candidates as runs of consecutive rows.
 struct Lattice {
     cx: f64,
     step: f64,
-    /// Per column: (first row, creation index of its candidate, number of rows).
-    runs: Vec<Vec<(i64, u32, u32)>>,
+    /// Edge lengths at the margin and at the cut.
+    e_upper: f64,
+    e_lower: f64,
+    runs: Vec<Run>,
+    /// Per column: its runs (indices into `runs`), from the top.
+    cols: Vec<Vec<u32>>,
+    /// Per candidate (creation index): its run.
+    run_of: Vec<u32>,
 }
 
 impl Lattice {
@@ -128,20 +153,32 @@ impl Lattice {
         if k % 2 == 1 { 0.5 } else { 0.0 }
     }
 
-    /// Records candidate `idx` at column `k`, row `j` (rows of a run pushed in order).
-    fn push(&mut self, k: usize, j: i64, idx: u32) {
-        let runs = &mut self.runs[k];
-        if let Some(last) = runs.last_mut()
-            && last.0 + last.2 as i64 == j
-            && last.1 + last.2 == idx
-        {
-            last.2 += 1;
-            return;
-        }
-        runs.push((j, idx, 1));
+    /// Height of row `j` in column `k`.
+    fn y(&self, k: usize, j: i64) -> f64 {
+        (j as f64 + self.shift(k)) * self.step
     }
 
-    /// Marks in `out` (by creation index) candidates `c` of `cand` closer to `p` than
+    /// Size at height `y` of run `r`: graded from the cut's edge length at the bottom to the
+    /// margin's at the top, by the loops the span lies between.
+    fn size(&self, r: &Run, y: f64) -> f64 {
+        let t = (y - r.bottom) / r.h;
+        match (r.top_up, r.bottom_up) {
+            (true, false) => self.e_lower + (self.e_upper - self.e_lower) * t,
+            (true, true) => self.e_upper,
+            (false, false) => self.e_lower,
+            (false, true) => 0.5 * (self.e_upper + self.e_lower),
+        }
+    }
+
+    /// Position and size of candidate `idx`.
+    fn at(&self, idx: u32) -> ([f64; 2], f64) {
+        let r = &self.runs[self.run_of[idx as usize] as usize];
+        let k = r.col as usize;
+        let y = self.y(k, r.j0 + (idx - r.first) as i64);
+        ([(k as f64 + 0.5) * self.cx, y], self.size(r, y))
+    }
+
+    /// Marks in `out` (by creation index) candidates `c` closer to `p` than
     /// `k·(size of c + e)`, sizes being at most `e_max`: every candidate marked is that close
     /// (each is tested), though not every such candidate need be marked. Columns are taken
     /// outwards from `p`'s until one marks nothing, and in each column's runs the rows outwards
@@ -151,11 +188,10 @@ impl Lattice {
         p: [f64; 2],
         (k, e, e_max): (f64, f64, f64),
         period: f64,
-        cand: &[(f64, [f64; 2], f64)],
         out: &mut [bool],
     ) {
         let r = k * (e_max + e);
-        let ncols = self.runs.len() as i64;
+        let ncols = self.cols.len() as i64;
         let kq = (p[0] / self.cx - 0.5).round() as i64;
         let dk = ((r / self.cx).ceil() as i64 + 1).min(ncols / 2);
         for side in [1i64, -1] {
@@ -163,7 +199,7 @@ impl Lattice {
             for d in first..=dk {
                 let col = (kq + side * d).rem_euclid(ncols) as usize;
                 let dx = wrap((col as f64 + 0.5) * self.cx - p[0], period);
-                if dx.abs() >= r || (!self.mark_column(col, dx, p, (k, e), cand, out) && d > 0) {
+                if dx.abs() >= r || (!self.mark_column(col, dx, p, (k, e), out) && d > 0) {
                     break;
                 }
             }
@@ -179,31 +215,31 @@ impl Lattice {
         dx: f64,
         p: [f64; 2],
         (k, e): (f64, f64),
-        cand: &[(f64, [f64; 2], f64)],
         out: &mut [bool],
     ) -> bool {
         let shift = self.shift(col);
         let mut any = false;
-        let mut mark = |j: i64, j0: i64, first: u32| {
-            let dy = (j as f64 + shift) * self.step - p[1];
-            let idx = (first + (j - j0) as u32) as usize;
-            let rc = k * (cand[idx].2 + e);
-            let close = dx * dx + dy * dy < rc * rc;
-            if close {
-                out[idx] = true;
-                any = true;
-            }
-            close
-        };
-        for &(j0, first, n) in &self.runs[col] {
-            let last = j0 + n as i64 - 1;
-            let jc = ((p[1] / self.step - shift).round() as i64).clamp(j0, last);
+        for &ri in &self.cols[col] {
+            let run = &self.runs[ri as usize];
+            let mut mark = |j: i64| {
+                let y = self.y(col, j);
+                let dy = y - p[1];
+                let rc = k * (self.size(run, y) + e);
+                let close = dx * dx + dy * dy < rc * rc;
+                if close {
+                    out[(run.first + (j - run.j0) as u32) as usize] = true;
+                    any = true;
+                }
+                close
+            };
+            let last = run.j0 + run.n as i64 - 1;
+            let jc = ((p[1] / self.step - shift).round() as i64).clamp(run.j0, last);
             let mut j = jc;
-            while j <= last && mark(j, j0, first) {
+            while j <= last && mark(j) {
                 j += 1;
             }
             let mut j = jc - 1;
-            while j >= j0 && mark(j, j0, first) {
+            while j >= run.j0 && mark(j) {
                 j -= 1;
             }
         }
@@ -211,15 +247,13 @@ impl Lattice {
     }
 }
 
-/// The creation indices of `cand` ordered by priority, then `x`, `y` and creation index (a
-/// stable radix sort on the priority's upper bits, the priorities being positive, then the rare
-/// runs that agree there by the whole priority and the rest): the order the greedy acceptance
+/// The creation indices of the candidates ordered by priority, then `x`, `y` (`pos`) and
+/// creation index, from `keys` = (priority's bits, creation index) per candidate (a stable
+/// radix sort on the priority's upper bits, the priorities being positive, then the rare runs
+/// that agree there by the whole priority and the rest): the order the greedy acceptance
 /// depends on.
-fn candidate_order(cand: &[(f64, [f64; 2], f64)]) -> Vec<u32> {
-    debug_assert!(cand.iter().all(|c| c.0 >= 0.0));
-    let mut keys: Vec<(u64, u32)> = (0..cand.len() as u32)
-        .map(|i| (cand[i as usize].0.to_bits(), i))
-        .collect();
+fn candidate_order(mut keys: Vec<(u64, u32)>, pos: impl Fn(u32) -> [f64; 2]) -> Vec<u32> {
+    debug_assert!(keys.iter().all(|k| f64::from_bits(k.0) >= 0.0));
     // The radix passes cover the priority's sign, exponent and upper mantissa bits only (3 of
     // 11 bits instead of 6): priorities that agree there are rare and sorted in full below.
     const LOW_BITS: u32 = 29;
@@ -232,7 +266,7 @@ fn candidate_order(cand: &[(f64, [f64; 2], f64)]) -> Vec<u32> {
         }
         if j - i > 1 {
             keys[i..j].sort_unstable_by(|a, b| {
-                let (p, q) = (cand[a.1 as usize].1, cand[b.1 as usize].1);
+                let (p, q) = (pos(a.1), pos(b.1));
                 a.0.cmp(&b.0)
                     .then(p[0].total_cmp(&q[0]))
                     .then(p[1].total_cmp(&q[1]))
@@ -252,12 +286,12 @@ pub fn sample(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
 }
 
 /// The candidates of a sample: a column-aligned hexagonal lattice of step `¼·e_min` inside the
-/// region, each with its priority (1 − its height in its column's span, the margin first) and
-/// size (graded from the cut's edge length to the margin's); the lattice's rows by column; and
+/// region (each candidate's size graded from the cut's edge length to the margin's), the
+/// candidates' sort keys (priority: 1 − its height in its column's span, the margin first) and
 /// the region's height range.
 struct Candidates {
-    cand: Vec<(f64, [f64; 2], f64)>,
     lattice: Lattice,
+    keys: Vec<(u64, u32)>,
     y_range: (f64, f64),
 }
 
@@ -286,17 +320,20 @@ fn candidates(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
             }
         }
     }
-    let mut cand: Vec<(f64, [f64; 2], f64)> = Vec::new();
+    let mut keys: Vec<(u64, u32)> = Vec::new();
     let mut lattice = Lattice {
         cx,
         step,
-        runs: vec![Vec::new(); ncols],
+        e_upper: o.e_upper,
+        e_lower: o.e_lower,
+        runs: Vec::new(),
+        cols: vec![Vec::new(); ncols],
+        run_of: Vec::new(),
     };
     let mut y_lo = f64::INFINITY;
     let mut y_hi = f64::NEG_INFINITY;
     for (k, c) in cross.iter_mut().enumerate() {
         c.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let xk = (k as f64 + 0.5) * cx;
         let shift = lattice.shift(k);
         let (mut pu, mut pl) = (false, false);
         for w in 0..c.len() {
@@ -315,28 +352,45 @@ fn candidates(up: &[[f64; 2]], lo: &[[f64; 2]], period: f64, o: &SampleOptions) 
             }
             y_lo = y_lo.min(bottom.0);
             y_hi = y_hi.max(top.0);
+            let mut run = Run {
+                col: k as u32,
+                j0: 0,
+                first: keys.len() as u32,
+                n: 0,
+                bottom: bottom.0,
+                h,
+                top_up: top.1,
+                bottom_up: bottom.1,
+            };
             let j0 = floor_i64(bottom.0 / step - shift) + 1;
             let j1 = ceil_i64(top.0 / step - shift) - 1;
+            // The heights rise with the row, so the rows kept are consecutive.
             for j in j0..=j1 {
                 let y = (j as f64 + shift) * step;
                 if y <= bottom.0 || y >= top.0 {
                     continue;
                 }
+                if run.n == 0 {
+                    run.j0 = j;
+                }
+                debug_assert_eq!(j, run.j0 + run.n as i64);
                 let t = (y - bottom.0) / h;
-                let size = match (top.1, bottom.1) {
-                    (true, false) => o.e_lower + (o.e_upper - o.e_lower) * t,
-                    (true, true) => o.e_upper,
-                    (false, false) => o.e_lower,
-                    (false, true) => 0.5 * (o.e_upper + o.e_lower),
-                };
-                lattice.push(k, j, cand.len() as u32);
-                cand.push((1.0 - t, [xk, y], size));
+                keys.push(((1.0 - t).to_bits(), run.first + run.n));
+                run.n += 1;
+            }
+            if run.n > 0 {
+                let ri = lattice.runs.len() as u32;
+                lattice.cols[k].push(ri);
+                lattice
+                    .run_of
+                    .extend(std::iter::repeat_n(ri, run.n as usize));
+                lattice.runs.push(run);
             }
         }
     }
     Candidates {
-        cand,
         lattice,
+        keys,
         y_range: (y_lo, y_hi),
     }
 }
@@ -352,14 +406,15 @@ fn sample_with(
 ) -> Vec<[f64; 2]> {
     let e_max = o.e_upper.max(o.e_lower);
     let Candidates {
-        cand,
         lattice,
+        keys,
         y_range: (mut y_lo, mut y_hi),
     } = candidates(up, lo, period, o);
-    if cand.is_empty() {
+    if keys.is_empty() {
         return Vec::new();
     }
-    let order = candidate_order(&cand);
+    let n_cand = keys.len();
+    let order = candidate_order(keys, |i| lattice.at(i).0);
     // Greedy acceptance against loop vertices, loop edges and accepted points.
     let cell = o.radius.max(o.clearance) * e_max;
     for lp in [up, lo] {
@@ -391,12 +446,12 @@ fn sample_with(
     // with their own size, the margin covering rounding), marked by creation index: most of
     // the fine lattice, skipped without a grid search. The acceptances are those of the full
     // test alone.
-    let mut rejected = vec![false; cand.len()];
+    let mut rejected = vec![false; n_cand];
     for idx in order {
         if rejected[idx as usize] {
             continue;
         }
-        let (_, p, e) = cand[idx as usize];
+        let (p, e) = lattice.at(idx);
         let ok_pts = pgrid.near(p, |id| {
             let (q, eq) = pts[id as usize];
             let r = o.radius * 0.5 * (e + eq);
@@ -420,157 +475,11 @@ fn sample_with(
         pts.push((p, e));
         if skip_sure {
             let k = 0.999 * o.radius * 0.5;
-            lattice.mark_within(p, (k, e, e_max), period, &cand, &mut rejected);
+            lattice.mark_within(p, (k, e, e_max), period, &mut rejected);
         }
     }
     pts[n_fixed..].iter().map(|&(p, _)| p).collect()
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The chart band's radius and clearance with the given loop edge lengths.
-    fn options(e_upper: f64, e_lower: f64) -> SampleOptions {
-        SampleOptions {
-            e_upper,
-            e_lower,
-            radius: 0.8,
-            clearance: 0.5,
-        }
-    }
-
-    /// With sizes 8x apart from margin to cut, the sample covers the band: no spot of the
-    /// region is farther than ~the local size from a sample or loop point, near the fine margin
-    /// as near the coarse cut.
-    #[test]
-    fn graded_sample_covers_the_band() {
-        let period = 10.0;
-        let n_up = 200;
-        let up: Vec<[f64; 2]> = (0..n_up)
-            .map(|i| [period * i as f64 / n_up as f64, 2.0])
-            .collect();
-        let lo: Vec<[f64; 2]> = (0..25).map(|i| [period * i as f64 / 25.0, 0.0]).collect();
-        let o = options(0.05, 0.4);
-        let s = sample(&up, &lo, period, &o);
-        let all: Vec<[f64; 2]> = s.iter().chain(&up).chain(&lo).copied().collect();
-        let size = |y: f64| o.e_lower + (o.e_upper - o.e_lower) * (y / 2.0);
-        let mut worst: f64 = 0.0;
-        for i in 0..200 {
-            for j in 1..80 {
-                let q = [period * i as f64 / 200.0, 2.0 * j as f64 / 80.0];
-                let d = all
-                    .iter()
-                    .map(|p| (wrap(p[0] - q[0], period).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
-                    .fold(f64::INFINITY, f64::min);
-                worst = worst.max(d / size(q[1]));
-            }
-        }
-        assert!(worst < 1.2, "a gap of {worst:.2} local sizes");
-        // And it is graded: many more points in the top tenth than in the bottom tenth.
-        let top = s.iter().filter(|p| p[1] > 1.8).count();
-        let bottom = s.iter().filter(|p| p[1] < 0.2).count();
-        assert!(
-            top > 10 * bottom.max(1),
-            "{top} near the margin, {bottom} near the cut"
-        );
-    }
-
-    /// Wavy loops with sizes 1x to 8x apart: skipping the candidates an accepted point is sure
-    /// to reject gives the very sample the full test gives.
-    #[test]
-    fn skipping_sure_rejections_changes_no_point() {
-        let period = 12.0;
-        for (e_up, e_lo, n_up, n_lo) in [
-            (0.05, 0.4, 240, 30),
-            (0.1, 0.1, 120, 120),
-            (0.3, 0.06, 40, 200),
-        ] {
-            let up: Vec<[f64; 2]> = (0..n_up)
-                .map(|i| {
-                    let x = period * i as f64 / n_up as f64;
-                    [x, 1.5 + 0.3 * (x * 2.1).sin()]
-                })
-                .collect();
-            let lo: Vec<[f64; 2]> = (0..n_lo)
-                .map(|i| {
-                    let x = period * i as f64 / n_lo as f64;
-                    [x, -0.2 * (x * 0.7).cos()]
-                })
-                .collect();
-            let o = options(e_up, e_lo);
-            let fast = sample_with(&up, &lo, period, &o, true);
-            let full = sample_with(&up, &lo, period, &o, false);
-            assert!(full.len() > 100, "{} points", full.len());
-            assert_eq!(fast, full, "sizes {e_up} / {e_lo}");
-        }
-    }
-
-    /// The radix order of the candidates is the comparison sort's by priority, x, y and
-    /// creation index, repeated priorities included.
-    #[test]
-    fn candidate_order_is_the_comparison_order() {
-        let mut rng = crate::phantom::rng::Rng::new(5);
-        let cand: Vec<(f64, [f64; 2], f64)> = (0..5000)
-            .map(|_| {
-                // Few distinct priorities and x values, so ties reach every key; some
-                // priorities differ only in their lowest bits (below the radix passes).
-                let mut prio = rng.below(50) as f64 / 49.0;
-                if rng.below(3) == 0 {
-                    prio = f64::from_bits(prio.to_bits() + rng.below(1 << 20) as u64);
-                }
-                let x = rng.below(7) as f64;
-                (prio, [x, rng.range(-1.0, 1.0)], 0.1)
-            })
-            .collect();
-        let mut expect: Vec<u32> = (0..cand.len() as u32).collect();
-        expect.sort_by(|&a, &b| {
-            let (p, q) = (cand[a as usize], cand[b as usize]);
-            p.0.total_cmp(&q.0)
-                .then(p.1[0].total_cmp(&q.1[0]))
-                .then(p.1[1].total_cmp(&q.1[1]))
-                .then(a.cmp(&b))
-        });
-        assert_eq!(candidate_order(&cand), expect);
-    }
-
-    #[test]
-    fn sample_is_inside_spaced_and_clear_of_loops() {
-        let period = 20.0;
-        let up: Vec<[f64; 2]> = (0..200)
-            .map(|i| {
-                let x = period * i as f64 / 200.0;
-                [x, 1.0 + 0.2 * (x * 3.0).sin()]
-            })
-            .collect();
-        let lo: Vec<[f64; 2]> = (0..70)
-            .map(|i| [period * i as f64 / 70.0, -0.3 * (x_of(i) * 0.5).cos()])
-            .collect();
-        fn x_of(i: usize) -> f64 {
-            20.0 * i as f64 / 70.0
-        }
-        let o = options(0.1, 0.3);
-        let s = sample(&up, &lo, period, &o);
-        assert!(s.len() > 500, "{} points", s.len());
-        for p in &s {
-            let k = ((p[0] / period * 200.0).floor() as usize).min(199);
-            let top = up[k][1].max(up[(k + 1) % 200][1]);
-            let kl = ((p[0] / period * 70.0).floor() as usize).min(69);
-            let bottom = lo[kl][1].min(lo[(kl + 1) % 70][1]);
-            assert!(p[1] < top && p[1] > bottom, "{p:?} outside");
-            for q in up.iter().chain(&lo) {
-                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                assert!(
-                    d >= 0.8 * 0.5 * (0.1 + 0.1) - 1e-12,
-                    "{p:?} too close to {q:?}"
-                );
-            }
-        }
-        for (i, p) in s.iter().enumerate() {
-            for q in &s[i + 1..] {
-                let d = ((wrap(p[0] - q[0], period)).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                assert!(d >= 0.8 * 0.1 - 1e-12);
-            }
-        }
-    }
-}
+mod tests;
