@@ -114,7 +114,8 @@ pub(super) fn builds_from(
 }
 
 /// The band builds of one tooth from the crown side `side`: built, and where crossings are
-/// left the crown's fringe trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds. A
+/// left the crown's fringe trimmed and the band built again, up to [`MAX_ATTEMPTS`] builds (fewer
+/// once the tooth has spent its builds, [`super::build_budget`]). A
 /// build whose band crosses only itself or the root (no crown face to trim: a trim can leave
 /// the margin with a notch the band folds over) is first built again on the same crown with
 /// other tangent lengths ([`super::polish::reshaped`]). Returns the build with the fewest
@@ -133,6 +134,8 @@ fn build_attempts(
     for attempt in 1..=MAX_ATTEMPTS {
         let mut a = match first.take() {
             Some(a) => a,
+            // The tooth's builds spent: the best so far is kept.
+            None if best.is_some() && !super::build_budget::more() => break,
             None => assemble(ct, &side, opts)?,
         };
         let hits_of = |a: &Assembled| {
@@ -199,6 +202,7 @@ fn retrim(
 
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
+    let _builds = super::build_budget::Scope::start();
     let mut warnings = ct.warnings.clone();
     let first = super::remedy::first_builds(ct, opts, &mut warnings)?;
     let mut inlets_closed = first.inlets_closed;
@@ -340,6 +344,7 @@ pub(super) fn crossings_left(a: &Assembled) -> usize {
 /// Builds the band between `side`'s margin and the root's cut loop, assembles crown + band +
 /// root, and optimises and untangles the band (as `opts.stitch` says).
 pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
+    super::build_budget::count();
     let (margin, frame, rc) = (&side.margin, &ct.frame, &ct.root);
     let mut mesh = side.crown.clone();
     let mut ios_vertex = side.ios_vertex.clone();

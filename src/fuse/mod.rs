@@ -5,6 +5,7 @@
 mod assembly;
 mod band_crossings;
 mod band_opt;
+mod build_budget;
 mod crossed;
 pub mod fringe;
 mod inlet;

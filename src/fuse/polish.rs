@@ -88,6 +88,9 @@ fn polish_step(
         let Some((crown, map, t)) = cut else {
             continue;
         };
+        if !super::build_budget::more() {
+            break;
+        }
         let next = trimmed_side(ct, crown, map);
         let b = assemble(ct, &next, opts)?;
         if crossings_left(&b) < crossings_left(a) {
@@ -114,7 +117,7 @@ pub(super) fn reshaped(
     mut best: Assembled,
 ) -> Assembled {
     for t in RESHAPE_TANGENTS {
-        if crossings_left(&best) == 0 {
+        if crossings_left(&best) == 0 || !super::build_budget::more() {
             break;
         }
         let mut o = *opts;

@@ -57,7 +57,7 @@ pub(super) fn first_builds(
     if crossings_left(&first) > 0 && opts.fringe_reach_mm > 0.0 {
         let mut crown = ct.crown.clone();
         let r = super::inlet::close_inlets(&mut crown);
-        if r.closed > 0 {
+        if r.closed > 0 && super::build_budget::more() {
             let closed = trimmed_side(ct, crown, ct.ios_vertex.clone());
             let from_closed = first_build(ct, &closed, opts).ok().and_then(|(f, copy)| {
                 let built = builds_from(ct, closed.clone(), opts, Some(f)).ok()?;
@@ -121,7 +121,7 @@ pub(super) fn remedies(
         return (a, trimmed);
     }
     for &factor in LAST_RESORT_REACH {
-        if crossings_left(&a) == 0 {
+        if crossings_left(&a) == 0 || !super::build_budget::more() {
             break;
         }
         let wide = FuseOptions {

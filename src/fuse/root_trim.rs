@@ -31,6 +31,9 @@ pub(super) fn rebuilt_on_peeled_root(
     opts: &FuseOptions,
     a: &Assembled,
 ) -> Option<Rebuilt> {
+    if !super::build_budget::more() {
+        return None;
+    }
     let tooth = root_trimmed(ct, a)?;
     let mut warnings = tooth.warnings.clone();
     let first = super::remedy::first_builds(&tooth, opts, &mut warnings).ok()?;

@@ -1,0 +1,70 @@
+//! The number of band builds one tooth's stitching may make. Each build is bounded (the band's
+//! size, the untangling's tests per band face), but the remedies chain builds: trims and
+//! rebuilds, the crown with its slits closed, wider fringe reaches, other tangent lengths, a
+//! root peeled at the cut, each up to its own limit. This caps their sum, so the stitching of
+//! any tooth costs at most [`MAX_BUILDS`] bounded builds whatever the input: once they are
+//! spent no further build is started and the best build so far is kept.
+//!
+//! The count lives in a thread-local: a tooth is stitched on one thread from start to end
+//! ([`Scope`] starts its count), and the builds are counted where they are made
+//! ([`super::assembly::assemble`]), whichever remedy asks for them.
+
+use std::cell::Cell;
+
+/// Band builds per tooth at most. On the rough phantom exports and the foreign jaws a tooth
+/// takes at most 36 (median 4; a clean tooth takes one).
+pub(super) const MAX_BUILDS: usize = 48;
+
+thread_local! {
+    /// Builds made by the tooth being stitched on this thread.
+    static MADE: Cell<usize> = const { Cell::new(0) };
+    /// The builds allowed per tooth on this thread ([`MAX_BUILDS`]; tests lower it).
+    static LIMIT: Cell<usize> = const { Cell::new(MAX_BUILDS) };
+    /// Builds made by the last tooth whose stitching ended on this thread.
+    #[cfg(test)]
+    static LAST: Cell<usize> = const { Cell::new(0) };
+}
+
+/// The stitching of one tooth: starts its count of builds, and restores the count it found on
+/// drop (a tooth stitched inside another's stitching, as a test may do, does not spend the
+/// outer tooth's builds).
+pub(super) struct Scope {
+    outer: usize,
+}
+
+impl Scope {
+    /// Starts counting a tooth's builds from zero.
+    pub(super) fn start() -> Scope {
+        Scope {
+            outer: MADE.with(|m| m.replace(0)),
+        }
+    }
+}
+
+impl Drop for Scope {
+    fn drop(&mut self) {
+        let made = MADE.with(|m| m.replace(self.outer));
+        #[cfg(test)]
+        LAST.with(|l| l.set(made));
+        #[cfg(not(test))]
+        let _ = made;
+    }
+}
+
+/// Counts one build.
+pub(super) fn count() {
+    MADE.with(|m| m.set(m.get() + 1));
+}
+
+/// Builds made so far by the tooth being stitched.
+pub(super) fn made() -> usize {
+    MADE.with(Cell::get)
+}
+
+/// Whether another build may be started.
+pub(super) fn more() -> bool {
+    made() < LIMIT.with(Cell::get)
+}
+
+#[cfg(test)]
+mod tests;
