@@ -248,12 +248,13 @@ impl<'a> FaceBuilder<'a> {
                 idx.len()
             )));
         }
-        let mut v = Vec::with_capacity(idx.len());
+        // Every index checked first (the first bad one named), then used as checked.
         for &i in idx {
-            v.push(self.check(f, i)?);
+            self.check(f, i)?;
         }
-        for k in 1..v.len() - 1 {
-            self.triangles.push([v[0], v[k], v[k + 1]]);
+        let v = |k: usize| idx[k] as u32;
+        for k in 1..idx.len() - 1 {
+            self.triangles.push([v(0), v(k), v(k + 1)]);
             self.source_poly.push(f as u32);
         }
         self.polys += 1;
@@ -270,15 +271,15 @@ impl<'a> FaceBuilder<'a> {
                 idx.len()
             )));
         }
-        let mut v = Vec::with_capacity(idx.len());
         for &i in idx {
-            v.push(self.check(f, i)?);
+            self.check(f, i)?;
         }
-        for k in 0..v.len() - 2 {
+        let v = |k: usize| idx[k] as u32;
+        for k in 0..idx.len() - 2 {
             let t = if k % 2 == 0 {
-                [v[k], v[k + 1], v[k + 2]]
+                [v(k), v(k + 1), v(k + 2)]
             } else {
-                [v[k + 1], v[k], v[k + 2]]
+                [v(k + 1), v(k), v(k + 2)]
             };
             self.triangles.push(t);
             self.source_poly.push(f as u32);

@@ -194,7 +194,9 @@ pub(super) fn read_ply(
     check_finite(file, &positions)?;
 
     let mut fb = FaceBuilder::new(file, positions.len());
-    let mut plabels = Vec::new();
+    fb.triangles.reserve(faces.len());
+    fb.source_poly.reserve(faces.len());
+    let mut plabels = Vec::with_capacity(if has_flabel { faces.len() } else { 0 });
     let key = face_key.unwrap_or("vertex_indices");
     for f in 0..faces.len() {
         if faces.not_integers == Some(f) {

@@ -197,17 +197,12 @@ fn read_property(
             let n = c.count(count_type)?;
             match (slot, list_out) {
                 (Slot::Indices, Some(faces)) => {
-                    if n.checked_mul(size_of(item)).is_none_or(|b| b > c.left()) {
+                    let Some(len) = n.checked_mul(size_of(item)).filter(|&b| b <= c.left()) else {
                         return Err(format!("a list of {n} items runs past the payload's end"));
-                    }
-                    let mut integers = true;
-                    for _ in 0..n {
-                        match c.integer(item)? {
-                            Some(v) => faces.idx.push(v),
-                            None => integers = false,
-                        }
-                    }
-                    if !integers {
+                    };
+                    let items = &c.bytes[c.at..c.at + len];
+                    c.at += len;
+                    if !integers_into(items, item, c.big, &mut faces.idx) {
                         faces.not_integers.get_or_insert(faces.len());
                     }
                 }
@@ -243,6 +238,93 @@ fn min_item_size(def: &ElementDef) -> usize {
         .sum()
 }
 
+/// The first `N` bytes of `b` in little-endian order (reversed from big-endian).
+fn bytes_le<const N: usize>(b: &[u8], big: bool) -> [u8; N] {
+    let mut a = [0u8; N];
+    a.copy_from_slice(&b[..N]);
+    if big {
+        a.reverse();
+    }
+    a
+}
+
+/// The scalar of type `t` at the start of `b` as `f64`, as [`Cursor::scalar`] reads it.
+fn scalar_at(b: &[u8], t: &ScalarType, big: bool) -> f64 {
+    match t {
+        ScalarType::Char => i8::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::UChar => u8::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::Short => i16::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::UShort => u16::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::Int => i32::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::UInt => u32::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::Float => f32::from_le_bytes(bytes_le(b, big)).into(),
+        ScalarType::Double => f64::from_le_bytes(bytes_le(b, big)),
+    }
+}
+
+/// Appends the integer items of a list (`items`: its bytes, items of type `t`) to `out`, as
+/// [`Cursor::integer`] reads them one by one; `false` (nothing appended) for a floating-point
+/// item type.
+fn integers_into(items: &[u8], t: &ScalarType, big: bool, out: &mut Vec<i64>) -> bool {
+    macro_rules! each {
+        ($ty:ty, $n:literal) => {
+            out.extend(
+                items
+                    .chunks_exact($n)
+                    .map(|b| i64::from(<$ty>::from_le_bytes(bytes_le(b, big)))),
+            )
+        };
+    }
+    match t {
+        ScalarType::Char => each!(i8, 1),
+        ScalarType::UChar => each!(u8, 1),
+        ScalarType::Short => each!(i16, 2),
+        ScalarType::UShort => each!(u16, 2),
+        ScalarType::Int => each!(i32, 4),
+        ScalarType::UInt => each!(u32, 4),
+        ScalarType::Float | ScalarType::Double => return false,
+    }
+    true
+}
+
+/// The vertex records of an element whose properties are all scalars: one fixed-size record
+/// each, decoded at fixed offsets (only the coordinates and the label; the rest skipped).
+/// `None` where a property is a list.
+fn fixed_vertices(
+    c: &mut Cursor,
+    def: &ElementDef,
+    props: &[(Slot, &PropertyType)],
+) -> Option<Vec<PlyVertex>> {
+    let mut used = Vec::new();
+    let mut size = 0;
+    for (slot, t) in props {
+        let PropertyType::Scalar(s) = t else {
+            return None;
+        };
+        if !matches!(slot, Slot::Skip) {
+            used.push((slot, s, size));
+        }
+        size += size_of(s);
+    }
+    // `check_count` has made sure the records fit in the bytes left.
+    let len = def.count * size;
+    let records = &c.bytes[c.at..c.at + len];
+    c.at += len;
+    let mut out = Vec::with_capacity(def.count);
+    for rec in records.chunks_exact(size.max(1)).take(def.count) {
+        let mut v = PlyVertex::default();
+        for &(slot, t, at) in &used {
+            let value = Some(scalar_at(&rec[at..], t, c.big));
+            match slot {
+                Slot::Coordinate(k) => v.xyz[*k] = value,
+                _ => v.label = value,
+            }
+        }
+        out.push(v);
+    }
+    Some(out)
+}
+
 /// Reads the `vertex` element: coordinates and the label property `label`'s value.
 pub(super) fn vertices(
     c: &mut Cursor,
@@ -251,6 +333,9 @@ pub(super) fn vertices(
 ) -> Result<Vec<PlyVertex>, String> {
     check_count(c, def, min_item_size(def))?;
     let props = plan(def, true, None, label);
+    if let Some(out) = fixed_vertices(c, def, &props) {
+        return Ok(out);
+    }
     let mut out = Vec::with_capacity(def.count);
     for i in 0..def.count {
         let mut v = PlyVertex::default();

@@ -115,13 +115,14 @@ fn volume_info(a: &InfoArgs) -> Result<()> {
 }
 
 fn describe(name: &str, m: &TriMesh) -> String {
-    let r = m.topology_report();
+    // A mesh that validates comes with its topology report (built once); only a mesh with a
+    // problem needs the report made apart.
+    let (r, problem) = match m.validate(&Default::default()) {
+        Ok(r) => (r, String::new()),
+        Err(e) => (m.topology_report(), format!(" [first problem: {e}]")),
+    };
     let closed = r.boundary_edges == 0 && r.non_manifold_edges == 0;
     let manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;
-    let problem = match m.validate(&Default::default()) {
-        Ok(_) => String::new(),
-        Err(e) => format!(" [first problem: {e}]"),
-    };
     format!(
         "{name}: {} vertices, {} faces, {} boundary loop(s), {} component(s), closed={}, manifold={}{}{problem}",
         r.vertices,
