@@ -29,7 +29,7 @@ mod verdict;
 
 use super::ToothData;
 use super::centroid::kabsch;
-use super::correspondence::SurfaceIndex;
+use super::correspondence::{NearestMemo, SurfaceIndex};
 use super::icp::{Normal7, Pair, step_about};
 use crate::arch::{arch_position, is_valid_fdi, jaw_of};
 use crate::{Error, Rigid};
@@ -241,15 +241,18 @@ fn icp(
     }
     let c0 = mean(&all);
     let mut medians = Vec::with_capacity(iterations);
+    // Per point, its last nearest-vertex search: the pairs are those of a search every time.
+    let mut memos = vec![NearestMemo::default(); all.len()];
     for _ in 0..iterations {
         let center = ios_to_cbct.apply(c0);
         // One thread: the hypotheses' fits run side by side ([`assess`]).
         let pairs: Vec<Pair> = teeth
             .iter()
             .flat_map(|t| t.ios.iter().map(move |p| (t, p)))
-            .map(|(t, p)| {
+            .zip(memos.iter_mut())
+            .map(|((t, p), memo)| {
                 let q = ios_to_cbct.apply(*p);
-                let c = t.cbct.closest_vertex(q);
+                let c = t.cbct.pair_remembered(q, false, memo);
                 Pair {
                     p: q,
                     q: c.point,
