@@ -24,7 +24,7 @@
 //! differ. The jaw is refused when the median fit or the tooth motions are beyond what the same
 //! patient gives.
 
-mod handedness;
+pub(crate) mod handedness;
 mod verdict;
 
 use super::ToothData;

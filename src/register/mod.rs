@@ -137,6 +137,9 @@ pub(crate) struct ToothData {
     pub ios_points: Vec<DVec3>,
     pub ios_normals: Vec<DVec3>,
     pub ios_centroid: DVec3,
+    /// The crown's occlusal direction (`gate::handedness::occlusal_of`; `None` for a closed
+    /// crown).
+    pub ios_occlusal: Option<DVec3>,
     pub ios_radius: f64,
     all: Vec<usize>,
     sub: Vec<usize>,
@@ -266,6 +269,7 @@ fn prepare(fdi: u8, ios: &TriMesh, cbct: &TriMesh, opts: &RegisterOptions) -> Re
         ios_points: ios.positions.clone(),
         ios_normals: normals,
         ios_centroid: c,
+        ios_occlusal: gate::handedness::occlusal_of(ios, c),
         ios_radius: r,
         all,
         sub,

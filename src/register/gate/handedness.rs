@@ -43,15 +43,22 @@ pub(crate) fn ios_handedness(teeth: &BTreeMap<u8, ToothData>) -> Option<bool> {
     Some((s > 0.0) == upper)
 }
 
-/// The occlusal direction of an IOS crown (unit, IOS frame): from the centroid of its margin (its
-/// longest boundary loop) to its centroid. `None` for a closed crown.
+/// The occlusal direction of an IOS crown (unit, IOS frame), found once per tooth when its data
+/// is prepared ([`occlusal_of`]).
 pub(super) fn occlusal(d: &ToothData) -> Option<DVec3> {
-    let loops = crate::mesh::boundary_loops(&d.ios_mesh);
+    d.ios_occlusal
+}
+
+/// The occlusal direction of the IOS crown `mesh` whose centroid is `centroid` (unit, IOS
+/// frame): from the centroid of its margin (its longest boundary loop) to its centroid. `None`
+/// for a closed crown.
+pub(crate) fn occlusal_of(mesh: &crate::mesh::TriMesh, centroid: DVec3) -> Option<DVec3> {
+    let loops = crate::mesh::boundary_loops(mesh);
     let rim = loops.iter().max_by_key(|l| l.len())?;
     let b = mean(
         &rim.iter()
-            .map(|&v| d.ios_mesh.positions[v as usize])
+            .map(|&v| mesh.positions[v as usize])
             .collect::<Vec<_>>(),
     );
-    Some((d.ios_centroid - b).normalize_or_zero())
+    Some((centroid - b).normalize_or_zero())
 }
