@@ -166,20 +166,26 @@ pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
 /// teeth and the fused ones are not all held at once (the same result).
 pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw {
     let teeth = std::mem::take(&mut cut.teeth);
-    let work: Vec<(usize, std::sync::Mutex<Option<CutTooth>>)> = teeth
-        .into_values()
-        .map(|c| (c.margin.len(), std::sync::Mutex::new(Some(c))))
+    // Each item is handed to one thread once, which takes the cut tooth out of it.
+    let work: Vec<(u8, usize, std::sync::Mutex<Option<CutTooth>>)> = teeth
+        .into_iter()
+        .map(|(fdi, c)| (fdi, c.margin.len(), std::sync::Mutex::new(Some(c))))
         .collect();
     let results = crate::par::map_ordered_by_cost(
         &work,
-        |w| w.0,
-        |w| {
-            let c =
-                w.1.lock()
-                    .unwrap_or_else(std::sync::PoisonError::into_inner)
-                    .take()
-                    .expect("each cut tooth is stitched once");
-            (c.fdi(), stitch_tooth(&c, opts))
+        |w| w.1,
+        |(fdi, _, tooth)| {
+            let taken = tooth
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take();
+            let r = match taken {
+                Some(c) => stitch_tooth(&c, opts),
+                None => Err(Error::InvalidArgument(format!(
+                    "tooth {fdi}: handed out for stitching twice"
+                ))),
+            };
+            (*fdi, r)
         },
     );
     merged(results, &cut, opts)
