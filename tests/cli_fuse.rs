@@ -432,6 +432,19 @@ fn coarse_lower_jaw_tilted_margin_keeps_its_orientation() {
     );
 }
 
+/// A coarse upper jaw fused from the command line whose incisor 12's margin holds three
+/// vertices a few micrometres apart: the band joins the outer two by a chord and folds through
+/// the middle one's sliver crown faces, and trimming them leaves a notch as narrow as the gap
+/// (the band folds into it). The middle vertex is collapsed onto a neighbour instead, and every
+/// tooth ends with no crossing added (2 band pairs were left on that tooth before).
+#[test]
+fn coarse_upper_jaw_skipped_margin_vertex_is_collapsed() {
+    fused_without_band_crossings(
+        "coarse_upper_skipped_vertex",
+        &["--seed", "24", "--jaw", "upper", "--ios-export", "coarse"],
+    );
+}
+
 /// A coarse upper jaw fused from the command line whose premolar 25 has a hole of half the
 /// margin's length that no cap clears until faces go with it, which grows it past the fill
 /// limit: it is filled all the same (the first round's choice), and every tooth is fused (25

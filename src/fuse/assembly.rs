@@ -75,6 +75,8 @@ pub(super) struct Assembled {
     pub(super) band: std::ops::Range<usize>,
     /// What the untangling did and left (`None` without untangling).
     pub(super) untangle: Option<super::untangle::UntangleReport>,
+    /// The crown's vertices: the first this many of `mesh`.
+    pub(super) crown_vertices: usize,
 }
 
 /// Band builds per tooth at most (the first and the rebuilds after trimming the fringe). Each
@@ -220,6 +222,18 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         }
         None => ct,
     };
+    // Left crossing the crown where the band skips a margin vertex: that vertex collapsed onto
+    // a neighbour and the builds made again.
+    if crossings_left(&a) > 0
+        && opts.fringe_reach_mm > 0.0
+        && let Some(c) = super::skipped::rebuilt(ct, opts, &a, &trimmed)
+    {
+        warnings.push(format!(
+            "{} margin vertices the band skipped collapsed onto a neighbour (their crown faces re-made on existing vertices)",
+            c.vertices
+        ));
+        (a, trimmed) = (c.kept, c.trim);
+    }
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",
@@ -446,5 +460,6 @@ pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> R
         ios_vertex,
         band: band_start..band_end,
         untangle,
+        crown_vertices: band_off as usize,
     })
 }

@@ -15,6 +15,7 @@ mod polish;
 pub mod quality;
 mod remedy;
 mod root_trim;
+mod skipped;
 mod tooth;
 pub mod untangle;
 
