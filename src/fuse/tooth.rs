@@ -74,10 +74,24 @@ pub(super) fn faces_added(
     ios_vertex: &[u32],
     input_keys: &[[u32; 3]],
 ) -> Vec<u32> {
+    // The keys are sorted by their smallest corner: `first[v]..first[v + 1]` are the keys whose
+    // smallest corner is `v` (a few), so a lookup scans those instead of searching them all.
+    let n = input_keys.last().map_or(0, |k| k[0] as usize + 1);
+    let mut first = vec![0u32; n + 1];
+    for k in input_keys {
+        first[k[0] as usize + 1] += 1;
+    }
+    for v in 0..n {
+        first[v + 1] += first[v];
+    }
+    let is_input = |k: [u32; 3]| {
+        let v = k[0] as usize;
+        v < n && input_keys[first[v] as usize..first[v + 1] as usize].contains(&k)
+    };
     (0..crown.len() as u32)
         .filter(|&f| {
             let k = sorted_corners(crown[f as usize].map(|v| ios_vertex[v as usize]));
-            k[2] == u32::MAX || input_keys.binary_search(&k).is_err()
+            k[2] == u32::MAX || !is_input(k)
         })
         .collect()
 }
@@ -451,4 +465,57 @@ pub(super) fn loop_chords(
     out.sort_unstable();
     out.dedup();
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::phantom::rng::Rng;
+
+    /// [`faces_added`] answers as a binary search of the sorted keys does, on random crowns
+    /// drawn from a small vertex range (so many faces share a smallest corner), with repair
+    /// vertices (`u32::MAX`) among them.
+    #[test]
+    fn added_faces_are_those_the_sorted_keys_lack() {
+        let mut rng = Rng::new(3);
+        for case in 0..300 {
+            let n = 3 + rng.below(40) as u32;
+            let face = |rng: &mut Rng| {
+                let a = rng.below(n as usize) as u32;
+                let b = (a + 1 + rng.below(n as usize - 1) as u32) % n;
+                let mut c = rng.below(n as usize) as u32;
+                while c == a || c == b {
+                    c = (c + 1) % n;
+                }
+                [a, b, c]
+            };
+            let input: Vec<[u32; 3]> = (0..rng.below(60)).map(|_| face(&mut rng)).collect();
+            let keys = face_keys(&input);
+            // The crown: some input faces (turned), some others; its vertices map to input
+            // vertices, a few to none.
+            let mut crown: Vec<[u32; 3]> = Vec::new();
+            for _ in 0..rng.below(60) {
+                if !input.is_empty() && rng.below(2) == 0 {
+                    let t = input[rng.below(input.len())];
+                    crown.push([t[1], t[2], t[0]]);
+                } else {
+                    crown.push(face(&mut rng));
+                }
+            }
+            let ios_vertex: Vec<u32> = (0..n)
+                .map(|v| if rng.below(15) == 0 { u32::MAX } else { v })
+                .collect();
+            let expect: Vec<u32> = (0..crown.len() as u32)
+                .filter(|&f| {
+                    let k = sorted_corners(crown[f as usize].map(|v| ios_vertex[v as usize]));
+                    k[2] == u32::MAX || keys.binary_search(&k).is_err()
+                })
+                .collect();
+            assert_eq!(
+                faces_added(&crown, &ios_vertex, &keys),
+                expect,
+                "case {case}"
+            );
+        }
+    }
 }
