@@ -37,8 +37,8 @@ pub(super) fn rebuilt(
     if !super::build_budget::more() {
         return None;
     }
-    let skipped = skipped_vertices(a, a.crown_vertices);
-    let mut crown = crown_of(a, a.crown_vertices);
+    let mut crown = crown_of(a);
+    let skipped = skipped_vertices(a, &crown);
     let mut vertices = 0;
     for (before, k, after) in skipped {
         if let Some(c) = collapse(&crown, k, before).or_else(|| collapse(&crown, k, after)) {
@@ -95,13 +95,13 @@ pub(super) fn rebuilt(
 
 /// Margin vertices skipped by a band edge and holding a crown face the band crosses, with
 /// their two margin neighbours: `(before, skipped, after)` in loop order, by skipped vertex.
-/// `crown_vertices`: the crown's vertex count in `a`'s mesh.
-pub(super) fn skipped_vertices(a: &Assembled, crown_vertices: usize) -> Vec<(u32, u32, u32)> {
+/// `crown`: the crown part of `a` ([`crown_of`]).
+pub(super) fn skipped_vertices(a: &Assembled, crown: &TriMesh) -> Vec<(u32, u32, u32)> {
     let Some(u) = &a.untangle else {
         return Vec::new();
     };
-    let crown = crown_of(a, crown_vertices);
-    let loops = boundary_loops(&crown);
+    let crown_vertices = a.crown_vertices;
+    let loops = boundary_loops(crown);
     let [margin] = loops.as_slice() else {
         return Vec::new();
     };
@@ -148,11 +148,10 @@ pub(super) fn skipped_vertices(a: &Assembled, crown_vertices: usize) -> Vec<(u32
     out
 }
 
-/// The crown part of `a`'s mesh (its first `crown_vertices` vertices and the faces before the
-/// band).
-fn crown_of(a: &Assembled, crown_vertices: usize) -> TriMesh {
+/// The crown part of `a`'s mesh (its crown vertices and the faces before the band).
+fn crown_of(a: &Assembled) -> TriMesh {
     TriMesh::new(
-        a.mesh.positions[..crown_vertices].to_vec(),
+        a.mesh.positions[..a.crown_vertices].to_vec(),
         a.mesh.triangles[..a.band.start].to_vec(),
     )
 }
@@ -161,43 +160,30 @@ fn crown_of(a: &Assembled, crown_vertices: usize) -> TriMesh {
 /// go, `k` is replaced by `onto` in the others. `None` when that would repeat an edge or a face,
 /// turn a face over (its normal against the old one), or make a face that crosses a crown face.
 pub(super) fn collapse(crown: &TriMesh, k: u32, onto: u32) -> Option<TriMesh> {
-    let fan: Vec<usize> = (0..crown.triangles.len())
-        .filter(|&f| crown.triangles[f].contains(&k))
-        .collect();
-    if !fan.iter().any(|&f| crown.triangles[f].contains(&onto)) {
+    let normal = |t: [u32; 3]| {
+        let [a, b, c] = t.map(|v| crown.positions[v as usize]);
+        (b - a).cross(c - a)
+    };
+    let mut triangles = Vec::with_capacity(crown.triangles.len());
+    let (mut made, mut on_edge) = (Vec::new(), false);
+    for &t in &crown.triangles {
+        if !t.contains(&k) {
+            triangles.push(t);
+        } else if t.contains(&onto) {
+            on_edge = true;
+        } else {
+            let n = t.map(|v| if v == k { onto } else { v });
+            if normal(n).dot(normal(t)) <= 0.0 {
+                return None;
+            }
+            made.push(triangles.len() as u32);
+            triangles.push(n);
+        }
+    }
+    if !on_edge {
         return None;
     }
-    let mut out = crown.clone();
-    let mut made = Vec::new();
-    for &f in &fan {
-        let t = crown.triangles[f];
-        if t.contains(&onto) {
-            continue;
-        }
-        let n = t.map(|v| if v == k { onto } else { v });
-        let normal = |t: [u32; 3]| {
-            let [a, b, c] = t.map(|v| crown.positions[v as usize]);
-            (b - a).cross(c - a)
-        };
-        if normal(n).dot(normal(t)) <= 0.0 {
-            return None;
-        }
-        out.triangles[f] = n;
-        made.push(f as u32);
-    }
-    let dropped: Vec<usize> = fan
-        .iter()
-        .copied()
-        .filter(|&f| crown.triangles[f].contains(&onto))
-        .collect();
-    for &f in dropped.iter().rev() {
-        out.triangles.remove(f);
-        made.iter_mut().for_each(|m| {
-            if *m as usize > f {
-                *m -= 1;
-            }
-        });
-    }
+    let out = TriMesh::new(crown.positions.clone(), triangles);
     // Every undirected edge in at most two faces, once each way; no face twice.
     let topo = EdgeTopology::new(&out);
     let (_, non_manifold) = topo.edge_counts();

@@ -163,7 +163,7 @@ pub fn write_mesh_with(
             let cannot = |e: std::io::Error| file_err(path, format!("cannot write: {e}"));
             let file = std::fs::File::create(path).map_err(cannot)?;
             let mut w = std::io::BufWriter::new(file);
-            write_ply(&mut w, mesh, vertex_int_props, ply_encoding)?;
+            ply::write_checked_ply(&mut w, mesh, vertex_int_props, ply_encoding)?;
             return std::io::Write::flush(&mut w).map_err(cannot);
         }
         Format::Stl => write_stl(&mut bytes, mesh)?,

@@ -373,6 +373,16 @@ pub fn write_ply(
     encoding: PlyEncoding,
 ) -> Result<()> {
     check_ply(mesh, vertex_int_props)?;
+    write_checked_ply(out, mesh, vertex_int_props, encoding)
+}
+
+/// [`write_ply`] of a mesh and properties [`check_ply`] has passed.
+pub(crate) fn write_checked_ply(
+    out: &mut impl Write,
+    mesh: &TriMesh,
+    vertex_int_props: &[(&str, &[i32])],
+    encoding: PlyEncoding,
+) -> Result<()> {
     let format = match encoding {
         PlyEncoding::BinaryLittleEndian => "binary_little_endian",
         PlyEncoding::BinaryBigEndian => "binary_big_endian",
