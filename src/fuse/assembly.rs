@@ -142,7 +142,7 @@ fn build_attempts(
         };
         let hits_of = |a: &Assembled| {
             if crossings_left(a) > 0 {
-                crown_faces_hit(a, side.crown.positions.len(), attempt > 2)
+                crown_faces_hit(a, attempt > 2)
             } else {
                 Vec::new()
             }
@@ -191,7 +191,7 @@ fn retrim(
         return r;
     }
     let mut pierced = hits.to_vec();
-    pierced.extend(pierced_margin_faces(a, side.crown.positions.len()));
+    pierced.extend(pierced_margin_faces(a));
     pierced.sort_unstable();
     pierced.dedup();
     let r = if pierced.len() > hits.len() {

@@ -9,7 +9,8 @@ use super::assembly::Assembled;
 /// neighbours next); when no pair has a crown face (band with band or root), the crown faces at
 /// the margin vertices of its band faces, so that the margin there moves and the band is laid
 /// out anew.
-pub(super) fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) -> Vec<u32> {
+pub(super) fn crown_faces_hit(a: &Assembled, ring: bool) -> Vec<u32> {
+    let crown_vertices = a.crown_vertices;
     let Some(u) = &a.untangle else {
         return Vec::new();
     };
@@ -51,7 +52,8 @@ pub(super) fn crown_faces_hit(a: &Assembled, crown_vertices: usize, ring: bool) 
 /// face on that edge crosses `g` too: the margin edge then passes through `g` (a fold of the
 /// crown at the margin), so no band face on that edge can clear `g` however its free corner
 /// moves; the margin there has to move (or `g` go).
-pub(super) fn pierced_margin_faces(a: &Assembled, crown_vertices: usize) -> Vec<u32> {
+pub(super) fn pierced_margin_faces(a: &Assembled) -> Vec<u32> {
+    let crown_vertices = a.crown_vertices;
     let Some(u) = &a.untangle else {
         return Vec::new();
     };

@@ -67,17 +67,12 @@ fn polish_step(
     a: &Assembled,
     side: &CrownSide,
 ) -> Result<Option<(Assembled, CrownSide, FringeTrim)>> {
-    let (n, reach) = (side.crown.positions.len(), opts.fringe_reach_mm);
+    let reach = opts.fringe_reach_mm;
     for stage in 0..2 {
         let cut = if stage == 0 {
-            side.trim(
-                ct,
-                reach,
-                &pierced_margin_faces(a, n),
-                &[Listed::MarginEdge],
-            )
+            side.trim(ct, reach, &pierced_margin_faces(a), &[Listed::MarginEdge])
         } else {
-            let hit = crown_faces_hit(a, n, false);
+            let hit = crown_faces_hit(a, false);
             side.trim(
                 ct,
                 reach,
