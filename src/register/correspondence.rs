@@ -28,6 +28,8 @@ pub struct SurfaceIndex {
     vf_start: Vec<u32>,
     vf_faces: Vec<u32>,
     tree: ImmutableKdTree<f64, 3>,
+    /// The vertices bucketed by cube, made on the first [`Self::vertices_near`].
+    near_grid: std::sync::OnceLock<super::vertex_grid::VertexGrid>,
 }
 
 impl SurfaceIndex {
@@ -80,6 +82,7 @@ impl SurfaceIndex {
             vf_start: count,
             vf_faces,
             tree,
+            near_grid: std::sync::OnceLock::new(),
             mesh: mesh.clone(),
         })
     }
@@ -118,19 +121,19 @@ impl SurfaceIndex {
             .item as usize
     }
 
-    /// Indices of the vertices at squared distance below `r2` from `q` (`(q - v)·(q - v) < r2`
-    /// exactly as glam computes it), in no particular order.
-    pub fn vertices_within(&self, q: DVec3, r2: f64) -> impl Iterator<Item = usize> + '_ {
-        // The tree's search radius is widened by a relative 1e-9 so that rounding in its own
-        // distance arithmetic cannot drop a vertex; the exact test below decides.
-        self.tree
-            .query(&q.to_array())
-            .within::<SquaredEuclidean<f64>>(r2 * (1.0 + 1e-9))
-            .unsorted()
-            .execute()
-            .into_iter()
-            .map(|n| n.item as usize)
-            .filter(move |&v| q.distance_squared(self.mesh.positions[v]) < r2)
+    /// Per vertex, whether some point of `pts` lies at squared distance below `r2` from it
+    /// (`(p - v)·(p - v) < r2` exactly as glam computes it). The vertices are bucketed in a grid
+    /// of cubes the first time this is asked (kept for later calls, shared by threads): each
+    /// point tests only the vertices of the cubes its ball overlaps.
+    pub fn vertices_near(&self, pts: &[DVec3], r2: f64) -> Vec<bool> {
+        let grid = self
+            .near_grid
+            .get_or_init(|| super::vertex_grid::VertexGrid::new(&self.mesh.positions));
+        let mut near = vec![false; self.mesh.positions.len()];
+        for p in pts {
+            grid.mark_within(*p, r2, &mut near);
+        }
+        near
     }
 
     /// Closest point on the triangulated surface among the faces around the nearest vertex, with

@@ -320,12 +320,8 @@ fn quick_fit(teeth: &[Pairing], stop: Stop) -> Option<QuickFit> {
             .map(|(t, &d)| {
                 // The CBCT vertices within 2 mm of the mapped crown, summed in index order.
                 let positions = &t.cbct.mesh().positions;
-                let mut is_near = vec![false; positions.len()];
-                for p in &t.ios {
-                    for v in t.cbct.vertices_within(init.apply(*p), 4.0) {
-                        is_near[v] = true;
-                    }
-                }
+                let mapped: Vec<DVec3> = t.ios.iter().map(|p| init.apply(*p)).collect();
+                let is_near = t.cbct.vertices_near(&mapped, 4.0);
                 let near: Vec<DVec3> = positions
                     .iter()
                     .zip(&is_near)

@@ -18,6 +18,7 @@ pub mod icp;
 mod measure;
 mod options;
 mod report;
+mod vertex_grid;
 
 pub use gate::{GateReport, ToothEvidence};
 pub use icp::{Convergence, RobustKernel, WeightOptions};
