@@ -33,9 +33,29 @@ impl NearFaces {
     /// Bins this round's faces: the band faces always, the faces off the band only when the
     /// band's region left the region they were binned for or the mesh's box changed.
     pub(super) fn update(&mut self, mesh: &TriMesh, band: Range<usize>, scale: f64) {
+        self.update_band(mesh, band.clone(), scale);
+        self.update_fixed(mesh, band, scale);
+    }
+
+    /// The band half of [`NearFaces::update`]: this round's band faces binned and its region.
+    /// Enough for a first count ([`NearFaces::band_grid`]); the faces off the band are binned by
+    /// [`NearFaces::update_fixed`] before anything searches them (a band with nothing to move,
+    /// as a clean one, never needs them).
+    pub(super) fn update_band(&mut self, mesh: &TriMesh, band: Range<usize>, scale: f64) {
         let cell = 2.0 * scale;
         let all = crate::geom::bounding_box(&mesh.positions).unwrap_or((DVec3::ZERO, DVec3::ZERO));
-        let region = band_region(mesh, band.clone(), cell);
+        let band_faces: Vec<u32> = band.clone().map(|f| f as u32).collect();
+        self.band = Some(TriangleGrid::over_region(mesh, &band_faces, all, cell));
+        self.region = band_region(mesh, band, cell);
+    }
+
+    /// The other half of [`NearFaces::update`], on the mesh as it was binned by
+    /// [`NearFaces::update_band`]: the faces off the band binned again only when the band's
+    /// region left the region they were binned for or the mesh's box changed.
+    pub(super) fn update_fixed(&mut self, mesh: &TriMesh, band: Range<usize>, scale: f64) {
+        let cell = 2.0 * scale;
+        let all = crate::geom::bounding_box(&mesh.positions).unwrap_or((DVec3::ZERO, DVec3::ZERO));
+        let region = self.region;
         let within =
             |r: (DVec3, DVec3), c: (DVec3, DVec3)| r.0.cmpge(c.0).all() && r.1.cmple(c.1).all();
         let reuse = self
@@ -55,9 +75,6 @@ impl NearFaces {
                 covered,
             });
         }
-        let band_faces: Vec<u32> = band.map(|f| f as u32).collect();
-        self.band = Some(TriangleGrid::over_region(mesh, &band_faces, all, cell));
-        self.region = region;
     }
 
     /// This round's band faces, binned (after [`NearFaces::update`]).

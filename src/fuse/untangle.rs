@@ -108,8 +108,14 @@ pub fn untangle_band(
     };
     let mut near = NearFaces::default();
     for round in 0..4 {
-        // Binned before the count: the count searches this round's grids too.
-        near.update(mesh, band.clone(), scale);
+        // Binned before the count: the count searches this round's grids too. The first count
+        // searches the band's grid only; the faces off the band are binned once a vertex is to
+        // move (on the mesh as it is here: nothing moves in between).
+        if round == 0 {
+            near.update_band(mesh, band.clone(), scale);
+        } else {
+            near.update(mesh, band.clone(), scale);
+        }
         let pairs = count(
             mesh,
             &report.crossing_pairs,
@@ -137,6 +143,9 @@ pub fn untangle_band(
         verts.dedup();
         if verts.is_empty() {
             break;
+        }
+        if round == 0 {
+            near.update_fixed(mesh, band.clone(), scale);
         }
         let moved = Movers {
             star: &star,
