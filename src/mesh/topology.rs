@@ -13,8 +13,7 @@ pub struct EdgeTopology {
 }
 
 impl EdgeTopology {
-    /// Builds the half-edge list of `mesh` (a counting sort by `from`, then a sort of each
-    /// vertex's few half-edges).
+    /// Builds the half-edge list of `mesh` (counting sorts, no comparisons).
     pub fn new(mesh: &TriMesh) -> Self {
         let n = mesh
             .triangles
@@ -32,17 +31,24 @@ impl EdgeTopology {
         for v in 0..n {
             offsets[v + 1] += offsets[v];
         }
+        // Two stable counting sorts, by target then by origin, leave the half-edges sorted by
+        // (from, to, face). A vertex is the target of as many half-edges as it is the origin of
+        // (one per face corner), so both sorts share the offsets.
         let mut fill = offsets.clone();
-        let mut half_edges = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
+        let mut by_to = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
         for (f, t) in mesh.triangles.iter().enumerate() {
             for k in 0..3 {
-                let a = t[k] as usize;
-                half_edges[fill[a] as usize] = (t[k], t[(k + 1) % 3], f as u32);
-                fill[a] += 1;
+                let b = t[(k + 1) % 3] as usize;
+                by_to[fill[b] as usize] = (t[k], t[(k + 1) % 3], f as u32);
+                fill[b] += 1;
             }
         }
-        for v in 0..n {
-            half_edges[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
+        fill.copy_from_slice(&offsets);
+        let mut half_edges = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
+        for e in by_to {
+            let a = e.0 as usize;
+            half_edges[fill[a] as usize] = e;
+            fill[a] += 1;
         }
         Self {
             half_edges,
@@ -321,6 +327,38 @@ fn count_edge(
 mod tests {
     use super::*;
     use crate::mesh::fixtures::{cube, square, tetrahedron};
+
+    /// The half-edges come out exactly as sorting every `(from, to, face)` would order them,
+    /// on random face lists with repeated, reversed, degenerate and duplicate faces and unused
+    /// vertices.
+    #[test]
+    fn half_edges_are_sorted_by_origin_target_and_face() {
+        let mut rng = crate::phantom::rng::Rng::new(5);
+        for n in [1u32, 2, 3, 7, 40] {
+            for faces in [0usize, 1, 5, 60, 300] {
+                let pick = |rng: &mut crate::phantom::rng::Rng| {
+                    (rng.range(0.0, f64::from(n)) as u32).min(n - 1)
+                };
+                let triangles: Vec<[u32; 3]> = (0..faces)
+                    .map(|_| [pick(&mut rng), pick(&mut rng), pick(&mut rng)])
+                    .collect();
+                let mesh = TriMesh::new(vec![glam::DVec3::ZERO; n as usize + 2], triangles);
+                let mut want: Vec<(u32, u32, u32)> = mesh
+                    .triangles
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(f, t)| (0..3).map(move |k| (t[k], t[(k + 1) % 3], f as u32)))
+                    .collect();
+                want.sort_unstable();
+                let topo = EdgeTopology::new(&mesh);
+                assert_eq!(topo.half_edges, want, "{n} vertices, {faces} faces");
+                for v in 0..n + 2 {
+                    let leaving: Vec<_> = want.iter().filter(|e| e.0 == v).copied().collect();
+                    assert_eq!(topo.leaving(v), leaving.as_slice());
+                }
+            }
+        }
+    }
 
     #[test]
     fn closed_meshes_have_no_boundary() {
