@@ -69,7 +69,7 @@ pub(super) fn count_all(
     let grid = band_grid(mesh, band.clone(), scale, binned, &mut own);
     // Band–band pairs, then band–other: faces in the band's cells, each pair once (the pairs
     // are only tested: their order does not matter).
-    let mut pairs = grid.candidate_pairs(mesh);
+    let mut pairs = grid.candidate_pairs_unordered(mesh);
     let mut hits = Vec::new();
     for g in (0..mesh.triangles.len()).filter(|g| !band.contains(g)) {
         let bg = bbox(mesh, g);

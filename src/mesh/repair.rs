@@ -363,7 +363,7 @@ fn caps_crossing_each_other(m: &TriMesh, caps: &[std::ops::Range<usize>]) -> usi
         .collect();
     let hole_of = |f: u32| caps.partition_point(|r| r.end <= f as usize);
     let mut crossing = vec![false; caps.len()];
-    for (f, g) in TriangleGrid::over(m, &faces, 0.0).candidate_pairs(m) {
+    for (f, g) in TriangleGrid::over(m, &faces, 0.0).candidate_pairs_unordered(m) {
         let (a, b) = (hole_of(f), hole_of(g));
         if a != b && triangles_intersect(m, f as usize, g as usize) {
             crossing[a] = true;

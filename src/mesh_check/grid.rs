@@ -155,6 +155,27 @@ impl TriangleGrid {
     /// corner of the two boxes' overlap, which both faces are binned in (the cell index of a
     /// coordinate never decreases as the coordinate grows), so no pair is found twice.
     pub fn candidate_pairs(&self, mesh: &TriMesh) -> Vec<(u32, u32)> {
+        let mut keys = self.candidate_keys(mesh);
+        crate::radix::sort_by_key(&mut keys, |&k| k);
+        keys.dedup();
+        keys.into_iter()
+            .map(|k| ((k >> self.face_bits) as u32, self.face_of_entry(k)))
+            .collect()
+    }
+
+    /// The pairs of [`TriangleGrid::candidate_pairs`] in no particular order, for callers that
+    /// test each pair or count them and do not need the order. Unique when the grid was built
+    /// over distinct faces (each pair is taken in one cell only).
+    pub fn candidate_pairs_unordered(&self, mesh: &TriMesh) -> Vec<(u32, u32)> {
+        self.candidate_keys(mesh)
+            .into_iter()
+            .map(|k| ((k >> self.face_bits) as u32, self.face_of_entry(k)))
+            .collect()
+    }
+
+    /// The pairs of [`TriangleGrid::candidate_pairs`] as keys `f << face_bits | g`, in the
+    /// order the cells are visited.
+    fn candidate_keys(&self, mesh: &TriMesh) -> Vec<u64> {
         let bbox = |f: u32| {
             let [a, b, c] = mesh.corners(f as usize);
             (a.min(b).min(c), a.max(b).max(c))
@@ -185,11 +206,7 @@ impl TriangleGrid {
                 }
             }
         }
-        crate::radix::sort_by_key(&mut keys, |&k| k);
-        keys.dedup();
-        keys.into_iter()
-            .map(|k| ((k >> self.face_bits) as u32, self.face_of_entry(k)))
-            .collect()
+        keys
     }
 
     /// The cell coordinates of cell `id`.
@@ -303,5 +320,9 @@ mod tests {
         }
         assert!(!want.is_empty());
         assert_eq!(g.candidate_pairs(&mesh), want);
+        // The same pairs unordered, each once.
+        let mut unordered = g.candidate_pairs_unordered(&mesh);
+        unordered.sort_unstable();
+        assert_eq!(unordered, want);
     }
 }

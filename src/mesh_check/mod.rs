@@ -28,7 +28,13 @@ pub fn self_intersections_up_to(mesh: &TriMesh, limit: usize) -> usize {
     if limit == 0 {
         return 0;
     }
-    intersecting_pairs(mesh).take(limit).count()
+    // A count: the pairs need no order.
+    let grid = TriangleGrid::new(mesh, 0.0);
+    grid.candidate_pairs_unordered(mesh)
+        .into_iter()
+        .filter(|&(f, g)| triangles_intersect(mesh, f as usize, g as usize))
+        .take(limit)
+        .count()
 }
 
 /// The intersecting pairs of [`self_intersections`], tested lazily in order.
