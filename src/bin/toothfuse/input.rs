@@ -92,8 +92,10 @@ impl InputArgs {
         let (Some(ios), Some(cbct)) = (&self.ios, &self.cbct) else {
             return Ok(None);
         };
-        let (ios, ios_note) = read_ios(ios, self.scheme(), self.ios_label_array.as_deref())?;
+        let read_ios_here = || read_ios(ios, self.scheme(), self.ios_label_array.as_deref());
         if toothfuse::io::is_volume_path(cbct) {
+            // A per-jaw volume may need the IOS crowns to split its teeth: IOS first.
+            let (ios, ios_note) = read_ios_here()?;
             let (teeth, split) = self.read_volume_teeth(cbct, &ios)?;
             eprintln!("{ios_note}");
             return Ok(Some((ios, teeth, split)));
@@ -102,8 +104,20 @@ impl InputArgs {
             scheme: self.scheme(),
             label_array: self.cbct_label_array.clone(),
         };
-        let t = toothfuse::io::read_teeth_opts(cbct, &opts)
-            .with_context(|| format!("reading CBCT {}", cbct.display()))?;
+        let read_cbct = || {
+            toothfuse::io::read_teeth_opts(cbct, &opts)
+                .with_context(|| format!("reading CBCT {}", cbct.display()))
+        };
+        // The two files are independent: read side by side (most of a fresh process's reading
+        // is the kernel handing it new pages), the IOS's error first when both fail.
+        let (ios_read, cbct_read) = std::thread::scope(|s| {
+            let c = s.spawn(read_cbct);
+            let i = read_ios_here();
+            let c = c.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+            (i, c)
+        });
+        let (ios, ios_note) = ios_read?;
+        let t = cbct_read?;
         // How the labels were read, said once both inputs are read (errors stay one line).
         eprintln!("{ios_note}");
         eprintln!(
