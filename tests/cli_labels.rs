@@ -325,3 +325,43 @@ fn ambiguous_or_missing_labels_are_refused_with_the_way_out() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The two input files are read side by side; whichever fails is named, the IOS first when
+/// both do.
+#[test]
+fn unreadable_inputs_are_named_ios_first() {
+    let d = tmp("unreadable");
+    let tetra = |label: i32| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nproperty int label\nelement face 4\n\
+             property list uchar int vertex_indices\nend_header\n\
+             0 0 0 {label}\n1 0 0 {label}\n0 1 0 {label}\n0 0 1 {label}\n\
+             3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"
+        )
+    };
+    let (good_ios, good_cbct) = (d.join("ios.ply"), d.join("cbct.ply"));
+    std::fs::write(&good_ios, tetra(46)).unwrap();
+    std::fs::write(&good_cbct, tetra(46)).unwrap();
+    let (bad_ios, bad_cbct) = (d.join("bad_ios.ply"), d.join("bad_cbct.ply"));
+    std::fs::write(
+        &bad_ios,
+        "ply\nformat ascii 1.0\nelement vertex 2\nend_header\n",
+    )
+    .unwrap();
+    std::fs::write(&bad_cbct, "not a mesh at all\n").unwrap();
+    let out = d.join("out");
+    let fuse = |ios: &Path, cbct: &Path| {
+        fails(&["fuse", "--ios", s(ios), "--cbct", s(cbct), "--out", s(&out)])
+    };
+    let e = fuse(&bad_ios, &bad_cbct);
+    assert!(e.contains("reading IOS") && e.contains(s(&bad_ios)), "{e}");
+    let e = fuse(&bad_ios, &good_cbct);
+    assert!(e.contains("reading IOS") && e.contains(s(&bad_ios)), "{e}");
+    let e = fuse(&good_ios, &bad_cbct);
+    assert!(
+        e.contains("reading CBCT") && e.contains(s(&bad_cbct)),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing written on a read error");
+}
