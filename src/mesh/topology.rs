@@ -149,10 +149,33 @@ impl EdgeTopology {
 
     /// Directed boundary half-edges: `a → b` present with no `b → a` partner, sorted.
     pub fn boundary_half_edges(&self) -> Vec<(u32, u32)> {
+        // Every half-edge reversed, `(b, a)` for `a → b`, sorted: a stable counting sort by
+        // target of the list sorted by origin. `a → b` has a partner exactly when `(a, b)` is
+        // among them, found by walking both sorted lists together (no lookup in another
+        // vertex's block per half-edge).
+        let n = self.offsets.len().saturating_sub(1);
+        let mut start = vec![0u32; n + 1];
+        for &(_, b, _) in &self.half_edges {
+            start[b as usize + 1] += 1;
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut reversed = vec![(0u32, 0u32); self.half_edges.len()];
+        for &(a, b, _) in &self.half_edges {
+            reversed[start[b as usize] as usize] = (b, a);
+            start[b as usize] += 1;
+        }
+        let mut j = 0;
         self.half_edges
             .iter()
-            .filter(|&&(a, b, _)| self.faces_of_directed(b, a).next().is_none())
             .map(|&(a, b, _)| (a, b))
+            .filter(|&key| {
+                while j < reversed.len() && reversed[j] < key {
+                    j += 1;
+                }
+                reversed.get(j) != Some(&key)
+            })
             .collect()
     }
 }
@@ -356,6 +379,49 @@ mod tests {
                     let leaving: Vec<_> = want.iter().filter(|e| e.0 == v).copied().collect();
                     assert_eq!(topo.leaving(v), leaving.as_slice());
                 }
+            }
+        }
+    }
+
+    /// The boundary half-edges found by walking the sorted lists together are those without a
+    /// reverse partner, on random face lists (repeated and reversed faces, degenerate ones).
+    #[test]
+    fn boundary_half_edges_are_those_without_a_partner() {
+        let mut rng = crate::phantom::rng::Rng::new(9);
+        for n in [1u32, 2, 4, 9, 30] {
+            for faces in [0usize, 1, 3, 20, 200] {
+                let pick = |rng: &mut crate::phantom::rng::Rng| {
+                    (rng.range(0.0, f64::from(n)) as u32).min(n - 1)
+                };
+                let mut triangles: Vec<[u32; 3]> = (0..faces)
+                    .map(|_| [pick(&mut rng), pick(&mut rng), pick(&mut rng)])
+                    .collect();
+                // Some faces twice, some reversed: partners and duplicate half-edges.
+                let extra: Vec<[u32; 3]> = triangles
+                    .iter()
+                    .step_by(3)
+                    .map(|t| {
+                        if t[0] % 2 == 0 {
+                            *t
+                        } else {
+                            [t[0], t[2], t[1]]
+                        }
+                    })
+                    .collect();
+                triangles.extend(extra);
+                let mesh = TriMesh::new(vec![glam::DVec3::ZERO; n as usize], triangles);
+                let topo = EdgeTopology::new(&mesh);
+                let want: Vec<(u32, u32)> = topo
+                    .half_edges
+                    .iter()
+                    .filter(|&&(a, b, _)| topo.faces_of_directed(b, a).next().is_none())
+                    .map(|&(a, b, _)| (a, b))
+                    .collect();
+                assert_eq!(
+                    topo.boundary_half_edges(),
+                    want,
+                    "{n} vertices, {faces} faces"
+                );
             }
         }
     }
