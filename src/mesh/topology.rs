@@ -351,6 +351,13 @@ mod tests {
     use super::*;
     use crate::mesh::fixtures::{cube, square, tetrahedron};
 
+    /// `faces` faces of random corners among vertices `0..n`: repeated corners (degenerate
+    /// faces), repeated and reversed faces all occur.
+    fn random_faces(rng: &mut crate::phantom::rng::Rng, n: u32, faces: usize) -> Vec<[u32; 3]> {
+        let mut pick = || (rng.range(0.0, f64::from(n)) as u32).min(n - 1);
+        (0..faces).map(|_| [pick(), pick(), pick()]).collect()
+    }
+
     /// The half-edges come out exactly as sorting every `(from, to, face)` would order them,
     /// on random face lists with repeated, reversed, degenerate and duplicate faces and unused
     /// vertices.
@@ -359,12 +366,7 @@ mod tests {
         let mut rng = crate::phantom::rng::Rng::new(5);
         for n in [1u32, 2, 3, 7, 40] {
             for faces in [0usize, 1, 5, 60, 300] {
-                let pick = |rng: &mut crate::phantom::rng::Rng| {
-                    (rng.range(0.0, f64::from(n)) as u32).min(n - 1)
-                };
-                let triangles: Vec<[u32; 3]> = (0..faces)
-                    .map(|_| [pick(&mut rng), pick(&mut rng), pick(&mut rng)])
-                    .collect();
+                let triangles = random_faces(&mut rng, n, faces);
                 let mesh = TriMesh::new(vec![glam::DVec3::ZERO; n as usize + 2], triangles);
                 let mut want: Vec<(u32, u32, u32)> = mesh
                     .triangles
@@ -390,12 +392,7 @@ mod tests {
         let mut rng = crate::phantom::rng::Rng::new(9);
         for n in [1u32, 2, 4, 9, 30] {
             for faces in [0usize, 1, 3, 20, 200] {
-                let pick = |rng: &mut crate::phantom::rng::Rng| {
-                    (rng.range(0.0, f64::from(n)) as u32).min(n - 1)
-                };
-                let mut triangles: Vec<[u32; 3]> = (0..faces)
-                    .map(|_| [pick(&mut rng), pick(&mut rng), pick(&mut rng)])
-                    .collect();
+                let mut triangles = random_faces(&mut rng, n, faces);
                 // Some faces twice, some reversed: partners and duplicate half-edges.
                 let extra: Vec<[u32; 3]> = triangles
                     .iter()
