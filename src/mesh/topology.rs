@@ -34,22 +34,13 @@ impl EdgeTopology {
         // Two stable counting sorts, by target then by origin, leave the half-edges sorted by
         // (from, to, face). A vertex is the target of as many half-edges as it is the origin of
         // (one per face corner), so both sorts share the offsets.
-        let mut fill = offsets.clone();
-        let mut by_to = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            for k in 0..3 {
-                let b = t[(k + 1) % 3] as usize;
-                by_to[fill[b] as usize] = (t[k], t[(k + 1) % 3], f as u32);
-                fill[b] += 1;
-            }
-        }
-        fill.copy_from_slice(&offsets);
-        let mut half_edges = vec![(0u32, 0u32, 0u32); mesh.triangles.len() * 3];
-        for e in by_to {
-            let a = e.0 as usize;
-            half_edges[fill[a] as usize] = e;
-            fill[a] += 1;
-        }
+        let corners = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(f, t)| (0..3).map(move |k| (t[k], t[(k + 1) % 3], f as u32)));
+        let by_to = placed_by(corners, &offsets, |e| e.1);
+        let half_edges = placed_by(by_to.into_iter(), &offsets, |e| e.0);
         Self {
             half_edges,
             offsets,
@@ -150,22 +141,12 @@ impl EdgeTopology {
     /// Directed boundary half-edges: `a → b` present with no `b → a` partner, sorted.
     pub fn boundary_half_edges(&self) -> Vec<(u32, u32)> {
         // Every half-edge reversed, `(b, a)` for `a → b`, sorted: a stable counting sort by
-        // target of the list sorted by origin. `a → b` has a partner exactly when `(a, b)` is
-        // among them, found by walking both sorted lists together (no lookup in another
-        // vertex's block per half-edge).
-        let n = self.offsets.len().saturating_sub(1);
-        let mut start = vec![0u32; n + 1];
-        for &(_, b, _) in &self.half_edges {
-            start[b as usize + 1] += 1;
-        }
-        for v in 0..n {
-            start[v + 1] += start[v];
-        }
-        let mut reversed = vec![(0u32, 0u32); self.half_edges.len()];
-        for &(a, b, _) in &self.half_edges {
-            reversed[start[b as usize] as usize] = (b, a);
-            start[b as usize] += 1;
-        }
+        // target of the list sorted by origin (a vertex is as often a target as an origin: the
+        // same offsets). `a → b` has a partner exactly when `(a, b)` is among them, found by
+        // walking both sorted lists together (no lookup in another vertex's block per
+        // half-edge).
+        let flipped = self.half_edges.iter().map(|&(a, b, _)| (b, a));
+        let reversed = placed_by(flipped, &self.offsets, |e| e.0);
         let mut j = 0;
         self.half_edges
             .iter()
@@ -178,6 +159,24 @@ impl EdgeTopology {
             })
             .collect()
     }
+}
+
+/// `items` in a stable counting sort by `vertex(item)`, whose runs start at `offsets` (one
+/// more entry than vertices; the last the item count): each vertex's items in their order in
+/// `items`.
+fn placed_by<K: Copy + Default>(
+    items: impl Iterator<Item = K>,
+    offsets: &[u32],
+    vertex: impl Fn(&K) -> u32,
+) -> Vec<K> {
+    let mut fill = offsets.to_vec();
+    let mut out = vec![K::default(); offsets.last().map_or(0, |&n| n as usize)];
+    for item in items {
+        let v = vertex(&item) as usize;
+        out[fill[v] as usize] = item;
+        fill[v] += 1;
+    }
+    out
 }
 
 /// Ordered boundary loops, each a cycle of vertex indices following the faces' orientation
@@ -354,7 +353,7 @@ mod tests {
     /// `faces` faces of random corners among vertices `0..n`: repeated corners (degenerate
     /// faces), repeated and reversed faces all occur.
     fn random_faces(rng: &mut crate::phantom::rng::Rng, n: u32, faces: usize) -> Vec<[u32; 3]> {
-        let mut pick = || (rng.range(0.0, f64::from(n)) as u32).min(n - 1);
+        let mut pick = || rng.below(n as usize) as u32;
         (0..faces).map(|_| [pick(), pick(), pick()]).collect()
     }
 
