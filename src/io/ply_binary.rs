@@ -70,44 +70,32 @@ impl<'a> Cursor<'a> {
         self.bytes.len() - self.at
     }
 
-    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
+    /// The next `n` bytes, the cursor moved past them.
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
         let b = self
-            .bytes
-            .get(self.at..self.at + N)
+            .at
+            .checked_add(n)
+            .and_then(|end| self.bytes.get(self.at..end))
             .ok_or_else(|| format!("the payload ends at byte {}", self.bytes.len()))?;
-        self.at += N;
-        let mut a = [0u8; N];
-        a.copy_from_slice(b);
-        if self.big {
-            a.reverse();
-        }
-        Ok(a)
+        self.at += n;
+        Ok(b)
     }
 
     /// A scalar as `f64` (the crate's reader gives every scalar type's value exactly; the
     /// integer types hold at most 32 bits, exact in `f64`).
     fn scalar(&mut self, t: &ScalarType) -> Result<f64, String> {
-        match t {
-            ScalarType::Float => Ok(f32::from_le_bytes(self.take()?).into()),
-            ScalarType::Double => Ok(f64::from_le_bytes(self.take()?)),
-            _ => Ok(self.integer(t)?.map_or(f64::NAN, |v| v as f64)),
-        }
+        let b = self.take(size_of(t))?;
+        Ok(scalar_at(b, t, self.big))
     }
 
     /// An integer item of a list (`None` for a floating-point type, whose bytes are skipped).
     fn integer(&mut self, t: &ScalarType) -> Result<Option<i64>, String> {
-        Ok(Some(match t {
-            ScalarType::Char => i8::from_le_bytes(self.take()?).into(),
-            ScalarType::UChar => u8::from_le_bytes(self.take()?).into(),
-            ScalarType::Short => i16::from_le_bytes(self.take()?).into(),
-            ScalarType::UShort => u16::from_le_bytes(self.take()?).into(),
-            ScalarType::Int => i32::from_le_bytes(self.take()?).into(),
-            ScalarType::UInt => u32::from_le_bytes(self.take()?).into(),
-            ScalarType::Float | ScalarType::Double => {
-                self.skip(size_of(t))?;
-                return Ok(None);
-            }
-        }))
+        let b = self.take(size_of(t))?;
+        Ok(match t {
+            ScalarType::Float | ScalarType::Double => None,
+            // At most 32 bits: exact in `f64` and back.
+            _ => Some(scalar_at(b, t, self.big) as i64),
+        })
     }
 
     /// A list's length: a non-negative integer of the count type.
@@ -122,11 +110,7 @@ impl<'a> Cursor<'a> {
     }
 
     fn skip(&mut self, n: usize) -> Result<(), String> {
-        if n > self.left() {
-            return Err(format!("the payload ends at byte {}", self.bytes.len()));
-        }
-        self.at += n;
-        Ok(())
+        self.take(n).map(|_| ())
     }
 
     /// Skips a list of `n` items of type `t`, checked against the bytes left.
@@ -248,7 +232,7 @@ fn bytes_le<const N: usize>(b: &[u8], big: bool) -> [u8; N] {
     a
 }
 
-/// The scalar of type `t` at the start of `b` as `f64`, as [`Cursor::scalar`] reads it.
+/// The scalar of type `t` at the start of `b` as `f64` (what [`Cursor::scalar`] reads).
 fn scalar_at(b: &[u8], t: &ScalarType, big: bool) -> f64 {
     match t {
         ScalarType::Char => i8::from_le_bytes(bytes_le(b, big)).into(),
