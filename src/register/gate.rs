@@ -34,7 +34,7 @@ use super::icp::{Normal7, Pair, step_about};
 use crate::arch::{arch_position, is_valid_fdi, jaw_of};
 use crate::{Error, Rigid};
 use glam::DVec3;
-use handedness::{ios_handedness, occlusal};
+use handedness::ios_handedness;
 use std::collections::BTreeMap;
 pub(crate) use verdict::wrong_jaw;
 use verdict::{jaw_verdict, misnumbered};
@@ -505,7 +505,7 @@ fn tooth_evidence(
         // references were set on it; a biased segmentation moved crowns along their axes when
         // the fits had no offset).
         let up = t
-            .apply_vector(occlusal(&teeth[&p.fdi]).unwrap_or(DVec3::ZERO))
+            .apply_vector(teeth[&p.fdi].ios_occlusal.unwrap_or(DVec3::ZERO))
             .normalize_or_zero();
         let v = own_motion[0];
         let own_lateral_mm = (v - up * v.dot(up)).length();

@@ -17,7 +17,7 @@ pub(crate) fn ios_handedness(teeth: &BTreeMap<u8, ToothData>) -> Option<bool> {
     let (mut right, mut left, mut front, mut back) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (&f, d) in teeth {
-        up += occlusal(d)?;
+        up += d.ios_occlusal?;
         let c = d.ios_centroid;
         if arch_position(f) < 0 {
             right.push(c)
@@ -41,12 +41,6 @@ pub(crate) fn ios_handedness(teeth: &BTreeMap<u8, ToothData>) -> Option<bool> {
         .next()
         .is_some_and(|&f| jaw_of(f) == crate::arch::Jaw::Upper);
     Some((s > 0.0) == upper)
-}
-
-/// The occlusal direction of an IOS crown (unit, IOS frame), found once per tooth when its data
-/// is prepared ([`occlusal_of`]).
-pub(super) fn occlusal(d: &ToothData) -> Option<DVec3> {
-    d.ios_occlusal
 }
 
 /// The occlusal direction of the IOS crown `mesh` whose centroid is `centroid` (unit, IOS
