@@ -356,10 +356,63 @@ pub(super) fn crossings_left(a: &Assembled) -> usize {
 }
 
 /// Builds the band between `side`'s margin and the root's cut loop, assembles crown + band +
-/// root, and optimises and untangles the band (as `opts.stitch` says).
+/// root, and optimises and untangles the band (as `opts.stitch` says). Where the chart band's
+/// lift folded over ([`stitch::BuiltBand::folded`]) and the untangling left band faces crossing
+/// each other, the loft band is built too and used instead when its faces cross each other less
+/// than the chart band's did ([`stitch::less_crossed_loft`]). A folded band the untangling
+/// clears of its own crossings needs no loft: only the others pay for one.
 pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
     super::build_budget::count();
-    let (margin, frame, rc) = (&side.margin, &ct.frame, &ct.root);
+    let rc = &ct.root;
+    let lower_pts = margin_pts_of(&rc.root, &rc.cut_loop);
+    let upper_pts = margin_pts_of(&side.crown, &side.margin);
+    let chords: Vec<(BandVertex, BandVertex)> = side
+        .chords
+        .iter()
+        .copied()
+        .chain(
+            ct.chords
+                .iter()
+                .copied()
+                .filter(|c| matches!(c.0, BandVertex::Lower(_))),
+        )
+        .collect();
+    let loops = BandLoops {
+        upper: &upper_pts,
+        upper_dir: &side.dirs,
+        lower: &lower_pts,
+        lower_dir: &ct.root_dirs,
+        chords: &chords,
+    };
+    let built = stitch::build_band(&loops, &ct.frame, &opts.stitch)?;
+    let a = assembled_with(ct, side, opts, &built.band)?;
+    if !(built.folded && crosses_itself(&a)) {
+        return Ok(a);
+    }
+    match stitch::less_crossed_loft(&loops, &ct.frame, &opts.stitch, &built.band) {
+        Some(loft) => assembled_with(ct, side, opts, &loft),
+        None => Ok(a),
+    }
+}
+
+/// Whether the untangling left a pair of two band faces crossing.
+fn crosses_itself(a: &Assembled) -> bool {
+    a.untangle.as_ref().is_some_and(|u| {
+        u.crossing_pairs
+            .iter()
+            .any(|&(f, g)| a.band.contains(&(f as usize)) && a.band.contains(&(g as usize)))
+    })
+}
+
+/// Crown + `band` + root assembled into one mesh, the band optimised and untangled (as
+/// `opts.stitch` says).
+fn assembled_with(
+    ct: &CutTooth,
+    side: &CrownSide,
+    opts: &FuseOptions,
+    band: &stitch::Band,
+) -> Result<Assembled> {
+    let (margin, rc) = (&side.margin, &ct.root);
     let mut mesh = side.crown.clone();
     let mut ios_vertex = side.ios_vertex.clone();
     let mut source: Vec<u8> = ios_vertex
@@ -372,30 +425,6 @@ pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> R
             }
         })
         .collect();
-    let lower_pts = margin_pts_of(&rc.root, &rc.cut_loop);
-    let upper_pts = margin_pts_of(&mesh, margin);
-    let chords: Vec<(BandVertex, BandVertex)> = side
-        .chords
-        .iter()
-        .copied()
-        .chain(
-            ct.chords
-                .iter()
-                .copied()
-                .filter(|c| matches!(c.0, BandVertex::Lower(_))),
-        )
-        .collect();
-    let band = stitch::build_band(
-        &BandLoops {
-            upper: &upper_pts,
-            upper_dir: &side.dirs,
-            lower: &lower_pts,
-            lower_dir: &ct.root_dirs,
-            chords: &chords,
-        },
-        frame,
-        &opts.stitch,
-    )?;
     // Assemble: band interior, then root.
     let band_off = mesh.positions.len() as u32;
     mesh.positions.extend_from_slice(&band.points);

@@ -112,73 +112,126 @@ pub struct Band {
     pub triangles: Vec<[BandVertex; 3]>,
 }
 
-/// Builds the band between the two loops. Its boundary is exactly the two loops.
-pub fn build_band(loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -> Result<Band> {
-    let (nu, nl) = (loops.upper.len(), loops.lower.len());
-    if nu < 3 || nl < 3 || loops.upper_dir.len() != nu || loops.lower_dir.len() != nl {
-        return Err(Error::InvalidArgument(
-            "band loops need ≥ 3 vertices and one direction per vertex".into(),
-        ));
-    }
-    // Orient both loops counter-clockwise about the axis; remember the original indices.
-    let order = |pts: &[DVec3], what: &str| -> Result<Vec<u32>> {
-        let w = param::winding(frame, pts);
-        let n = pts.len() as u32;
-        match param::once_around(w) {
-            Some(true) => Ok((0..n).collect()),
-            Some(false) => Ok((0..n).rev().collect()),
-            None => Err(Error::InvalidArgument(format!(
-                "{what} loop winds {w:.2} times around the tooth axis, expected once"
-            ))),
+/// A band as [`build_band`] makes it.
+#[derive(Clone, Debug, Default)]
+pub struct BuiltBand {
+    /// The band.
+    pub band: Band,
+    /// The chart's lift folded the band over in places (an inward offset beyond the reference
+    /// curve's radius of curvature: deep interproximal notches of narrow incisors), so its
+    /// faces may cross each other there; where they still do after the band is untangled, the
+    /// loft band ([`build_loft_band`]) may cross itself less.
+    pub folded: bool,
+}
+
+/// The loops ordered counter-clockwise about the axis: per loop, the original indices in that
+/// order, and the points and directions so ordered.
+struct Ordered {
+    uo: Vec<u32>,
+    lo: Vec<u32>,
+    up_pts: Vec<DVec3>,
+    lo_pts: Vec<DVec3>,
+    up_dirs: Vec<DVec3>,
+    lo_dirs: Vec<DVec3>,
+}
+
+impl Ordered {
+    fn new(loops: &BandLoops, frame: &ToothFrame) -> Result<Ordered> {
+        let (nu, nl) = (loops.upper.len(), loops.lower.len());
+        if nu < 3 || nl < 3 || loops.upper_dir.len() != nu || loops.lower_dir.len() != nl {
+            return Err(Error::InvalidArgument(
+                "band loops need ≥ 3 vertices and one direction per vertex".into(),
+            ));
         }
-    };
-    let uo = order(loops.upper, "margin")?;
-    let lo = order(loops.lower, "cut")?;
-    let pick = |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
-    let (up_pts, lo_pts) = (pick(loops.upper, &uo), pick(loops.lower, &lo));
-    let (up_dirs, lo_dirs) = (pick(loops.upper_dir, &uo), pick(loops.lower_dir, &lo));
-    let loft = || {
+        let order = |pts: &[DVec3], what: &str| -> Result<Vec<u32>> {
+            let w = param::winding(frame, pts);
+            let n = pts.len() as u32;
+            match param::once_around(w) {
+                Some(true) => Ok((0..n).collect()),
+                Some(false) => Ok((0..n).rev().collect()),
+                None => Err(Error::InvalidArgument(format!(
+                    "{what} loop winds {w:.2} times around the tooth axis, expected once"
+                ))),
+            }
+        };
+        let uo = order(loops.upper, "margin")?;
+        let lo = order(loops.lower, "cut")?;
+        let pick =
+            |src: &[DVec3], o: &[u32]| o.iter().map(|&i| src[i as usize]).collect::<Vec<_>>();
+        Ok(Ordered {
+            up_pts: pick(loops.upper, &uo),
+            lo_pts: pick(loops.lower, &lo),
+            up_dirs: pick(loops.upper_dir, &uo),
+            lo_dirs: pick(loops.lower_dir, &lo),
+            uo,
+            lo,
+        })
+    }
+
+    fn loft(&self, loops: &BandLoops, frame: &ToothFrame, opts: &StitchOptions) -> Result<Band> {
         loft_band(
             loops,
             frame,
             opts,
-            [&uo, &lo],
-            [&up_pts, &lo_pts],
-            [&up_dirs, &lo_dirs],
+            [&self.uo, &self.lo],
+            [&self.up_pts, &self.lo_pts],
+            [&self.up_dirs, &self.lo_dirs],
         )
-    };
+    }
+}
+
+/// Builds the band between the two loops. Its boundary is exactly the two loops. With
+/// [`PointGeneration::Chart`], the chart band, or the loft band where the loops do not chart as
+/// one simple annulus; otherwise the loft band.
+pub fn build_band(
+    loops: &BandLoops,
+    frame: &ToothFrame,
+    opts: &StitchOptions,
+) -> Result<BuiltBand> {
+    let o = Ordered::new(loops, frame)?;
     if opts.points == PointGeneration::Chart {
         let ordered = chart_band::OrderedLoops {
-            uo: &uo,
-            lo: &lo,
-            up_pts: &up_pts,
-            lo_pts: &lo_pts,
-            up_dirs: &up_dirs,
-            lo_dirs: &lo_dirs,
+            uo: &o.uo,
+            lo: &o.lo,
+            up_pts: &o.up_pts,
+            lo_pts: &o.lo_pts,
+            up_dirs: &o.up_dirs,
+            lo_dirs: &o.lo_dirs,
         };
-        // Where the loops do not chart as one simple annulus: the loft rings. Where the chart's
-        // lift folds the band over (an inward offset beyond the reference curve's radius of
-        // curvature: deep interproximal notches of narrow incisors), the loft rings too, and
-        // the band whose faces cross each other less is kept (the chart band on a tie).
-        let Ok(chart) = chart_band::chart_band(loops, frame, opts, &ordered) else {
-            return loft();
-        };
-        if chart.folded == 0 {
-            return Ok(chart.band);
+        if let Ok(chart) = chart_band::chart_band(loops, frame, opts, &ordered) {
+            return Ok(BuiltBand {
+                band: chart.band,
+                folded: chart.folded > 0,
+            });
         }
-        // A folded chart band that does not cross itself cannot be beaten: no loft is built.
-        let chart_count = band_self_intersections(&chart.band, loops, usize::MAX);
-        if chart_count == 0 {
-            return Ok(chart.band);
-        }
-        return Ok(match loft() {
-            // The loft usually crosses itself many times more than the folded chart band: its
-            // count stops at the chart band's.
-            Ok(b) if band_self_intersections(&b, loops, chart_count) < chart_count => b,
-            _ => chart.band,
-        });
     }
-    loft()
+    Ok(BuiltBand {
+        band: o.loft(loops, frame, opts)?,
+        folded: false,
+    })
+}
+
+/// The loft band between the two loops (rings on a Hermite loft, or the paper's recursive
+/// points with [`PointGeneration::Recursive`]) when its faces cross each other fewer times than
+/// `chart`'s (a band between the same loops; exact test): the alternative to a folded chart
+/// band ([`BuiltBand::folded`]). `None` when `chart` does not cross itself, when the loft
+/// crosses itself as often or more (the usual case: its count stops at the chart band's), or
+/// when it fails to build.
+pub fn less_crossed_loft(
+    loops: &BandLoops,
+    frame: &ToothFrame,
+    opts: &StitchOptions,
+    chart: &Band,
+) -> Option<Band> {
+    let chart_count = band_self_intersections(chart, loops, usize::MAX);
+    if chart_count == 0 {
+        return None;
+    }
+    let loft = Ordered::new(loops, frame)
+        .ok()?
+        .loft(loops, frame, opts)
+        .ok()?;
+    (band_self_intersections(&loft, loops, chart_count) < chart_count).then_some(loft)
 }
 
 /// Pairs of band faces that intersect each other (exact test), counted up to `limit`: how
