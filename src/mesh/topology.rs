@@ -346,13 +346,19 @@ fn count_edge(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::mesh::fixtures::{cube, square, tetrahedron};
 
     /// `faces` faces of random corners among vertices `0..n`: repeated corners (degenerate
     /// faces), repeated and reversed faces all occur.
-    fn random_faces(rng: &mut crate::phantom::rng::Rng, n: u32, faces: usize) -> Vec<[u32; 3]> {
+    /// `faces` faces on random vertices below `n`: repeated, reversed, degenerate and duplicate
+    /// faces, unused vertices.
+    pub(in crate::mesh) fn random_faces(
+        rng: &mut crate::phantom::rng::Rng,
+        n: u32,
+        faces: usize,
+    ) -> Vec<[u32; 3]> {
         let mut pick = || rng.below(n as usize) as u32;
         (0..faces).map(|_| [pick(), pick(), pick()]).collect()
     }

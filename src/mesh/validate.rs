@@ -204,13 +204,12 @@ pub fn non_manifold_vertices_of(mesh: &TriMesh, topo: &EdgeTopology) -> Vec<u32>
             continue;
         }
         prev.clear();
-        for &(_, b, f) in block {
+        // The half-edge is `t[k] → t[k + 1]` for some k, so the third corner `t[k + 2]` is the
+        // exclusive or of all three with both ends (whatever corners repeat).
+        prev.extend(block.iter().map(|&(_, b, f)| {
             let t = mesh.triangles[f as usize];
-            let k = (0..3)
-                .find(|&k| t[k] == v && t[(k + 1) % 3] == b)
-                .unwrap_or(0);
-            prev.push(t[(k + 2) % 3]);
-        }
+            t[0] ^ t[1] ^ t[2] ^ v ^ b
+        }));
         if one_cycle(block, &prev) {
             continue;
         }
@@ -351,6 +350,67 @@ mod tests {
             m.validate(&Default::default()),
             Err(Error::DegenerateFace { face: 0 })
         );
+    }
+
+    /// Per vertex, whether its corners (taken from the faces directly) fall into more than one
+    /// fan of corners sharing a neighbour vertex: the definition, without the topology.
+    fn non_manifold_by_definition(mesh: &TriMesh) -> Vec<u32> {
+        let mut out = Vec::new();
+        for v in 0..mesh.positions.len() as u32 {
+            let corners: Vec<[u32; 2]> = mesh
+                .triangles
+                .iter()
+                .flat_map(|t| {
+                    (0..3)
+                        .filter(move |&k| t[k] == v)
+                        .map(move |k| [t[(k + 1) % 3], t[(k + 2) % 3]])
+                })
+                .collect();
+            let mut fan: Vec<usize> = (0..corners.len()).collect();
+            let mut changed = true;
+            while changed {
+                changed = false;
+                for i in 0..corners.len() {
+                    for j in 0..corners.len() {
+                        let shared = corners[i].iter().any(|x| corners[j].contains(x));
+                        if shared && fan[j] > fan[i] {
+                            fan[j] = fan[i];
+                            changed = true;
+                        }
+                    }
+                }
+            }
+            let mut roots = fan.clone();
+            roots.sort_unstable();
+            roots.dedup();
+            if roots.len() > 1 {
+                out.push(v);
+            }
+        }
+        out
+    }
+
+    /// The non-manifold vertices from the topology are those of the definition, on random face
+    /// lists (repeated, reversed, degenerate and duplicate faces) and on closed meshes.
+    #[test]
+    fn non_manifold_vertices_match_the_definition() {
+        let mut rng = crate::phantom::rng::Rng::new(13);
+        for n in [3u32, 5, 12, 40] {
+            for faces in [1usize, 4, 20, 80] {
+                let triangles = crate::mesh::topology::tests::random_faces(&mut rng, n, faces);
+                let mesh = TriMesh::new(vec![DVec3::ZERO; n as usize + 1], triangles);
+                assert_eq!(
+                    non_manifold_vertices(&mesh),
+                    non_manifold_by_definition(&mesh),
+                    "{:?}",
+                    mesh.triangles
+                );
+            }
+        }
+        for mesh in [cube(1.0), tetrahedron()] {
+            assert!(non_manifold_vertices(&mesh).is_empty());
+            assert!(non_manifold_by_definition(&mesh).is_empty());
+        }
     }
 
     #[test]
