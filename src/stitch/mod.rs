@@ -120,7 +120,7 @@ pub struct BuiltBand {
     /// The chart's lift folded the band over in places (an inward offset beyond the reference
     /// curve's radius of curvature: deep interproximal notches of narrow incisors), so its
     /// faces may cross each other there; where they still do after the band is untangled, the
-    /// loft band ([`build_loft_band`]) may cross itself less.
+    /// loft band ([`less_crossed_loft`]) may cross itself less.
     pub folded: bool,
 }
 
