@@ -352,8 +352,6 @@ pub(super) mod tests {
 
     /// `faces` faces of random corners among vertices `0..n`: repeated corners (degenerate
     /// faces), repeated and reversed faces all occur.
-    /// `faces` faces on random vertices below `n`: repeated, reversed, degenerate and duplicate
-    /// faces, unused vertices.
     pub(in crate::mesh) fn random_faces(
         rng: &mut crate::phantom::rng::Rng,
         n: u32,
