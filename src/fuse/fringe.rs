@@ -112,6 +112,21 @@ pub fn trim_fringe(
     extra: &[u32],
     listed_mode: Listed,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
+    trim_rounds(crown, src, dist_in, reach, extra, listed_mode, true)
+}
+
+/// [`trim_fringe`], with `carry` whether a round takes the crossing pairs from the round before
+/// where it can (see [`carried_pairs`]) instead of searching the crown for them again (the same
+/// trim either way; the tests compare both).
+fn trim_rounds(
+    crown: &TriMesh,
+    src: &[u32],
+    dist_in: &[f64],
+    reach: f64,
+    extra: &[u32],
+    listed_mode: Listed,
+    carry: bool,
+) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
     let mut mesh = crown.clone();
     let mut map = src.to_vec();
     let mut report = FringeTrim::default();
@@ -122,6 +137,9 @@ pub fn trim_fringe(
             *l = true;
         }
     }
+    // The crossing pairs with a face of the last round's fringe, renumbered for the crown as it
+    // is now, when the peel allows (see `carried_pairs`).
+    let mut carried: Option<Vec<(u32, u32)>> = None;
     for _ in 0..4 {
         report.rounds += 1;
         let round = Round {
@@ -134,19 +152,30 @@ pub fn trim_fringe(
             topo: std::cell::OnceCell::new(),
         };
         let (fringe, is_fringe) = round.fringe();
-        let bad = round.targets(&fringe, &is_fringe);
+        let pairs = match carried.take() {
+            // This round's fringe faces were fringe faces last round: their pairs are there.
+            Some(p) => p
+                .into_iter()
+                .filter(|&(f, g)| is_fringe[f as usize] || is_fringe[g as usize])
+                .collect(),
+            None => crossing_pairs(&mesh, &fringe),
+        };
+        let bad = round.targets(&pairs, &is_fringe);
         if !bad.contains(&true) {
             // Nothing to remove: the round ends as the peel would, without its topology.
             break;
         }
         let mut remove = round.removal(&is_fringe, &bad);
         listed.clear();
-        let Some((rep, next, removed)) = peel(&mesh, &map, &mut remove, dist_in, reach) else {
+        let Some(p) = peel(&mesh, &map, &mut remove, dist_in, reach) else {
             break;
         };
-        report.faces += removed;
-        map = next;
-        mesh = rep;
+        if carry && let Some(old_of_new) = &p.face_of {
+            carried = Some(carried_pairs(&pairs, old_of_new, mesh.triangles.len()));
+        }
+        report.faces += p.removed;
+        map = p.map;
+        mesh = p.crown;
     }
     if report.faces == 0 {
         return None;
@@ -223,10 +252,11 @@ impl Round<'_> {
         (fringe, is_fringe)
     }
 
-    /// Per face: whether it has to go. Of a crossing pair one face has to go: the one nearer
+    /// Per face: whether it has to go, for the crossing `pairs` of the fringe faces
+    /// ([`crossing_pairs`] of the fringe). Of a crossing pair one face has to go: the one nearer
     /// the margin (so the least of the crown goes), or the only one in the fringe; and every
     /// listed face.
-    fn targets(&self, fringe: &[u32], is_fringe: &[bool]) -> Vec<bool> {
+    fn targets(&self, pairs: &[(u32, u32)], is_fringe: &[bool]) -> Vec<bool> {
         // Vertices that are no input vertex (a filled hole's) have no distance: they do not
         // count.
         let depth = |f: u32| {
@@ -236,7 +266,7 @@ impl Round<'_> {
                 .fold(f64::INFINITY, |a, &d| a.min(d))
         };
         let mut bad = vec![false; self.mesh.triangles.len()];
-        for (f, g) in crossing_pairs(self.mesh, fringe) {
+        for &(f, g) in pairs {
             let pick = match (is_fringe[f as usize], is_fringe[g as usize]) {
                 (true, true) if depth(g) < depth(f) => g,
                 (true, _) => f,
@@ -352,6 +382,65 @@ fn count_lost(src: &[u32], map: &[u32], dist_in: &[f64], report: &mut FringeTrim
     }
 }
 
+/// The crossing pairs `pairs` (face indices of the crown before a peel, `(smaller, larger)`,
+/// sorted) of the faces the peel kept, renumbered: `old_of_new[f]` is the index before the peel
+/// of the peeled crown's face `f`. The peel keeps faces in their order (so the pairs stay
+/// ordered and sorted), changes no position and, where it hands `old_of_new` out, splits no
+/// vertex and turns no face: two kept faces cross after it exactly when they did before, and
+/// no new pair can arise. So a later round's pairs with a face of its fringe (which were fringe
+/// faces in the earlier round too: the fringe is fixed by the input vertices' distances and
+/// the listed faces count in the first round only) are these, filtered.
+fn carried_pairs(pairs: &[(u32, u32)], old_of_new: &[u32], old_faces: usize) -> Vec<(u32, u32)> {
+    let mut new_of_old = vec![u32::MAX; old_faces];
+    for (new, &old) in old_of_new.iter().enumerate() {
+        new_of_old[old as usize] = new as u32;
+    }
+    pairs
+        .iter()
+        .map(|&(f, g)| (new_of_old[f as usize], new_of_old[g as usize]))
+        .filter(|&(f, g)| f != u32::MAX && g != u32::MAX)
+        .collect()
+}
+
+/// What [`peel`] made.
+struct Peeled {
+    /// The trimmed crown.
+    crown: TriMesh,
+    /// Its vertices' input indices.
+    map: Vec<u32>,
+    /// Faces removed.
+    removed: usize,
+    /// Per face of `crown`, its index in the crown before the peel, where the repair only took
+    /// faces away (no vertex split, no face turned, nothing added); `None` otherwise.
+    face_of: Option<Vec<u32>>,
+}
+
+/// Per face of `rep` (the repair of `cut`, the crown's faces left by `remove`, with `rep_src`
+/// its vertices' indices in the crown), its index in the crown, found by walking both face
+/// lists in order; `None` where a face of `rep` is not the next of the crown's kept faces (the
+/// repair did more than take faces away).
+fn faces_kept(
+    crown: &TriMesh,
+    remove: &[bool],
+    rep: &TriMesh,
+    rep_src: &[u32],
+) -> Option<Vec<u32>> {
+    let mut kept = crown
+        .triangles
+        .iter()
+        .zip(remove)
+        .enumerate()
+        .filter(|(_, (_, r))| !**r)
+        .map(|(f, (t, _))| (f as u32, *t));
+    rep.triangles
+        .iter()
+        .map(|t| {
+            let want = t.map(|v| rep_src[v as usize]);
+            kept.find(|&(_, k)| k == want).map(|(f, _)| f)
+        })
+        .collect()
+}
+
 /// Times [`peel`] puts back the marked faces at a pinch and tries again.
 const PEEL_RETRIES: usize = 4;
 
@@ -360,15 +449,14 @@ const PEEL_RETRIES: usize = 4;
 /// where the removal leaves several boundary loops, or the repair drops a piece cut off by it
 /// that holds a vertex beyond the reach, the marked faces touching the culprit vertices (those
 /// of the extra loops, or of the dropped pieces) are kept instead and the rest is tried again,
-/// so that one pinching face does not hold back the whole round. Returns the trimmed crown, its
-/// vertices' input indices and the number of faces removed; `None` when nothing can go.
+/// so that one pinching face does not hold back the whole round. `None` when nothing can go.
 fn peel(
     mesh: &TriMesh,
     map: &[u32],
     remove: &mut [bool],
     dist_in: &[f64],
     reach: f64,
-) -> Option<(TriMesh, Vec<u32>, usize)> {
+) -> Option<Peeled> {
     let n = mesh.positions.len();
     let mut used = vec![false; n];
     for t in &mesh.triangles {
@@ -389,7 +477,7 @@ fn peel(
             return None;
         }
         let cut = TriMesh::new(mesh.positions.clone(), kept);
-        let (rep, rep_src, _) = repair_open_surface(
+        let (rep, rep_src, done) = repair_open_surface(
             &cut,
             &RepairOptions {
                 max_hole_fraction: 0.0,
@@ -450,7 +538,19 @@ fn peel(
                     }
                 })
                 .collect();
-            return Some((rep, next, removed));
+            let only_taken = done.split_vertices == 0
+                && done.flipped_faces == 0
+                && done.filled_holes == 0
+                && done.added_vertices == 0;
+            let face_of = only_taken
+                .then(|| faces_kept(mesh, remove, &rep, &rep_src))
+                .flatten();
+            return Some(Peeled {
+                crown: rep,
+                map: next,
+                removed,
+                face_of,
+            });
         }
         let mut restored = 0;
         for (t, r) in mesh.triangles.iter().zip(remove.iter_mut()) {

@@ -108,8 +108,18 @@ fn a_removal_that_pinches_is_put_back_and_the_rest_goes() {
     for f in [0, under_tab, harmless] {
         remove[f] = true;
     }
-    let (rep, next, removed) = peel(&crown, &map, &mut remove, &dist_in, 0.3).unwrap();
+    let Peeled {
+        crown: rep,
+        map: next,
+        removed,
+        face_of,
+    } = peel(&crown, &map, &mut remove, &dist_in, 0.3).unwrap();
     assert_eq!(removed, 1);
+    // Only the harmless face went: every other face kept, in order.
+    let others: Vec<u32> = (0..crown.triangles.len() as u32)
+        .filter(|&f| f as usize != harmless)
+        .collect();
+    assert_eq!(face_of, Some(others));
     assert!(remove[harmless] && !remove[0] && !remove[under_tab]);
     assert_eq!(rep.triangles.len(), crown.triangles.len() - 1);
     assert_eq!(boundary_loops(&rep).len(), 1);
@@ -189,4 +199,57 @@ fn crossing_pairs_are_every_crossing_of_a_candidate() {
     expect.dedup();
     assert!(expect.len() > 20, "{} pairs", expect.len());
     assert_eq!(crossing_pairs(&mesh, &candidates), expect);
+}
+
+/// The crossing pairs a round takes over from the round before give the same trims as a search
+/// of the crown every round, on the rough phantom's crowns (folded slivers along the clipped
+/// margin, trimmed over several rounds) with the fringe alone and with listed faces.
+#[test]
+fn carried_pairs_trim_as_a_fresh_search_does() {
+    use crate::phantom::{IosExport, Phantom, PhantomOptions};
+    let mut opts = PhantomOptions::default();
+    opts.realism.ios.rough = IosExport::Rough.roughness();
+    let p = Phantom::generate(&opts).expect("phantom generates");
+    let mut carried_rounds = 0;
+    for (fdi, crown) in p.ios_crowns().into_iter().take(6) {
+        let inputs = crown.positions.len();
+        let (crown, src, _) = repair_open_surface(&crown, &RepairOptions::default());
+        let loops = boundary_loops(&crown);
+        assert_eq!(loops.len(), 1, "tooth {fdi}");
+        let d = edge_distance(&crown, &loops[0], 0.9);
+        let mut dist_in = vec![f64::INFINITY; inputs];
+        for (v, &s) in src.iter().enumerate() {
+            if let Some(x) = dist_in.get_mut(s as usize) {
+                *x = x.min(d[v]);
+            }
+        }
+        // Some faces on the margin listed, as a band that crossed them would list them.
+        let listed: Vec<u32> = (0..crown.triangles.len() as u32)
+            .filter(|&f| {
+                crown.triangles[f as usize]
+                    .iter()
+                    .any(|v| loops[0].contains(v))
+            })
+            .step_by(7)
+            .collect();
+        for extra in [&[][..], &listed[..]] {
+            for mode in [Listed::Within, Listed::Apex] {
+                let a = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, true);
+                let b = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, false);
+                let key = |r: &Option<(TriMesh, Vec<u32>, FringeTrim)>| {
+                    r.as_ref().map(|(m, map, t)| {
+                        (m.positions.clone(), m.triangles.clone(), map.clone(), *t)
+                    })
+                };
+                assert_eq!(
+                    key(&a),
+                    key(&b),
+                    "tooth {fdi}, {mode:?}, {} listed",
+                    extra.len()
+                );
+                carried_rounds += a.map_or(0, |(_, _, t)| t.rounds.saturating_sub(1));
+            }
+        }
+    }
+    assert!(carried_rounds > 0, "some trim ran more than one round");
 }
