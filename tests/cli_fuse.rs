@@ -393,7 +393,8 @@ fn coarse_lower_jaw_self_folded_band_reshaped() {
 
 /// [`demo_fused`] in a fresh folder named `name`: all 14 teeth fused, each watertight with no
 /// crossing the fusion added left (with a band face, or with a face added to the crown).
-fn fused_without_band_crossings(name: &str, demo_args: &[&str]) {
+/// Returns the report.
+fn fused_without_band_crossings(name: &str, demo_args: &[&str]) -> serde_json::Value {
     let d = tmp(name);
     let r = demo_fused(&d, demo_args);
     let teeth = r["teeth"].as_array().unwrap();
@@ -405,6 +406,41 @@ fn fused_without_band_crossings(name: &str, demo_args: &[&str]) {
         assert_eq!(t["quality"]["crown_crossings_added"], 0, "tooth {fdi}: {t}");
     }
     let _ = std::fs::remove_dir_all(&d);
+    r
+}
+
+/// A coarse lower jaw fused from the command line whose molar 46 folds at its margin: two crown
+/// faces on the margin cross two faces one ring in whose inner corners lie beyond the 0.3 mm
+/// fringe, and a margin edge passes through one of them, so every band face on that edge
+/// crosses it (one band pair was left after every other remedy). The cut's fold trim is made
+/// again within 0.6 mm of the margin, and every tooth ends with no crossing added; 46 says so,
+/// its IOS vertices trimmed counted (at most 0.6 mm from the margin, under 4 % of the crown).
+#[test]
+fn coarse_lower_jaw_fold_beyond_the_fringe_is_trimmed_wider() {
+    let r = fused_without_band_crossings(
+        "coarse_lower_fold_wide",
+        &["--seed", "8", "--jaw", "lower", "--ios-export", "coarse"],
+    );
+    let widened: Vec<&serde_json::Value> = r["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| {
+            t["warnings"].as_array().unwrap().iter().any(|w| {
+                w.as_str()
+                    .unwrap()
+                    .contains("the fold trimmed again within")
+            })
+        })
+        .collect();
+    assert_eq!(widened.len(), 1, "{r}");
+    let t = widened[0];
+    assert_eq!(t["fdi"], 46, "{t}");
+    let q = &t["quality"];
+    let trimmed = q["ios_vertices_trimmed"].as_u64().unwrap();
+    let kept = q["crown_vertices"].as_u64().unwrap();
+    assert!(trimmed > 0 && trimmed * 25 < trimmed + kept, "{q}");
+    assert!(q["ios_trim_reach_mm"].as_f64().unwrap() <= 0.6, "{q}");
 }
 
 /// A coarse lower jaw fused from the command line whose incisor 41's builds all leave the band

@@ -202,9 +202,27 @@ fn retrim(
     r.or_else(|| side.trim(ct, reach, &pierced, &[Listed::MarginEdge]))
 }
 
-fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
-    let t_start = std::time::Instant::now();
-    let _builds = super::build_budget::Scope::start();
+/// The build a tooth keeps after its builds and every remedy for a build left crossed (see
+/// [`remedied`]), with what it needs for the report.
+pub(super) struct Remedied {
+    /// The build kept.
+    pub(super) kept: Assembled,
+    /// The tooth's whole trim (the cut's and the builds').
+    pub(super) trim: super::fringe::FringeTrim,
+    /// Narrow slits of the margin closed on the crown the build kept was made from.
+    pub(super) inlets_closed: usize,
+    /// The tooth's warnings.
+    pub(super) warnings: Vec<String>,
+    /// The cut tooth the build kept was made on, where a remedy made another one (the root
+    /// peeled at the cut, the crown's fold trimmed farther); `None` for the tooth as cut.
+    pub(super) tooth: Option<CutTooth>,
+}
+
+/// The builds of `ct` ([`super::remedy::first_builds`], [`super::remedy::remedies`]) and, where
+/// crossings are left, the remedies that make another tooth or crown: the root peeled at the
+/// cut ([`super::root_trim`]), then the margin vertices the band skips collapsed
+/// ([`super::skipped`]).
+pub(super) fn remedied(ct: &CutTooth, opts: &FuseOptions) -> Result<Remedied> {
     let mut warnings = ct.warnings.clone();
     let first = super::remedy::first_builds(ct, opts, &mut warnings)?;
     let mut inlets_closed = first.inlets_closed;
@@ -213,20 +231,17 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let rebuilt = (crossings_left(&a) > 0 && opts.fringe_reach_mm > 0.0)
         .then(|| super::root_trim::rebuilt_on_peeled_root(ct, opts, &a))
         .flatten();
-    let root_peeled;
-    let ct = match rebuilt {
-        Some(r) => {
-            (a, trimmed, inlets_closed, warnings) = (r.kept, r.trim, r.inlets_closed, r.warnings);
-            root_peeled = r.tooth;
-            &root_peeled
-        }
-        None => ct,
-    };
+    let mut tooth = None;
+    if let Some(r) = rebuilt {
+        (a, trimmed, inlets_closed, warnings) = (r.kept, r.trim, r.inlets_closed, r.warnings);
+        tooth = Some(r.tooth);
+    }
+    let on = tooth.as_ref().unwrap_or(ct);
     // Left crossing the crown where the band skips a margin vertex: that vertex collapsed onto
     // a neighbour and the builds made again.
     if crossings_left(&a) > 0
         && opts.fringe_reach_mm > 0.0
-        && let Some(c) = super::skipped::rebuilt(ct, opts, &a, &trimmed)
+        && let Some(c) = super::skipped::rebuilt(on, opts, &a, &trimmed)
     {
         warnings.push(format!(
             "{} margin vertices the band skipped collapsed onto a neighbour (their crown faces re-made on existing vertices)",
@@ -234,6 +249,34 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         ));
         (a, trimmed) = (c.kept, c.trim);
     }
+    Ok(Remedied {
+        kept: a,
+        trim: trimmed,
+        inlets_closed,
+        warnings,
+        tooth,
+    })
+}
+
+fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
+    let t_start = std::time::Instant::now();
+    let _builds = super::build_budget::Scope::start();
+    let mut r = remedied(ct, opts)?;
+    // Still crossed after every remedy: the cut's fold trim made again reaching farther.
+    if crossings_left(&r.kept) > 0
+        && opts.fringe_reach_mm > 0.0
+        && let Some(w) = super::fold_wide::rebuilt(ct, opts, crossings_left(&r.kept))
+    {
+        r = w;
+    }
+    let Remedied {
+        kept: a,
+        trim: trimmed,
+        inlets_closed,
+        mut warnings,
+        tooth,
+    } = r;
+    let ct = tooth.as_ref().unwrap_or(ct);
     if trimmed.vertices > ct.trimmed.vertices {
         warnings.push(format!(
             "{} more IOS crown vertices trimmed from the margin fringe (crossed by the band)",

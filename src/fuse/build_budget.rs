@@ -1,9 +1,12 @@
 //! The number of band builds one tooth's stitching may make. Each build is bounded (the band's
 //! size, the untangling's tests per band face), but the remedies chain builds: trims and
 //! rebuilds, the crown with its slits closed, wider fringe reaches, other tangent lengths, a
-//! root peeled at the cut, each up to its own limit. This caps their sum, so the stitching of
-//! any tooth costs at most [`MAX_BUILDS`] bounded builds whatever the input: once they are
-//! spent no further build is started and the best build so far is kept.
+//! root peeled at the cut, each up to its own limit. This caps their sum: the builds of the
+//! tooth as cut and their remedies make at most [`MAX_BUILDS`] bounded builds whatever the
+//! input; once they are spent no further build is started and the best build so far is kept.
+//! The last remedy, for a tooth still crossed after all of them, makes new cuts of the tooth
+//! (its fold trimmed farther, [`super::fold_wide`]) whose builds have a cap of their own, so a
+//! tooth's stitching costs at most twice [`MAX_BUILDS`] builds.
 //!
 //! The count lives in a thread-local: a tooth is stitched on one thread from start to end
 //! ([`Scope`] starts its count), and the builds are counted where they are made
@@ -11,8 +14,9 @@
 
 use std::cell::Cell;
 
-/// Band builds per tooth at most. On the rough phantom exports and the foreign jaws a tooth
-/// takes at most 36 (median 4; a clean tooth takes one).
+/// Band builds per tooth at most, over its builds and remedies as cut (and as many again for
+/// the last remedy's new cuts). On the rough phantom exports and the foreign jaws a tooth takes
+/// at most 36 (median 4; a clean tooth takes one).
 pub(super) const MAX_BUILDS: usize = 48;
 
 thread_local! {
@@ -23,6 +27,10 @@ thread_local! {
     /// Builds made by the last tooth whose stitching ended on this thread.
     #[cfg(test)]
     static LAST: Cell<usize> = const { Cell::new(0) };
+    /// Builds made on this thread in every scope (a tooth's builds with those of the scopes
+    /// inside its own).
+    #[cfg(test)]
+    static ALL: Cell<usize> = const { Cell::new(0) };
 }
 
 /// The stitching of one tooth: starts its count of builds, and restores the count it found on
@@ -54,6 +62,8 @@ impl Drop for Scope {
 /// Counts one build.
 pub(super) fn count() {
     MADE.with(|m| m.set(m.get() + 1));
+    #[cfg(test)]
+    ALL.with(|a| a.set(a.get() + 1));
 }
 
 /// Builds made so far by the tooth being stitched.

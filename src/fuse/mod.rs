@@ -7,6 +7,7 @@ mod band_crossings;
 mod band_opt;
 mod build_budget;
 mod crossed;
+mod fold_wide;
 pub mod fringe;
 mod inlet;
 mod jaw;

@@ -23,10 +23,12 @@ impl Drop for Limit {
     }
 }
 
-/// `ct` stitched, with the builds it made.
-fn stitched(ct: &CutTooth) -> (FusedTooth, usize) {
+/// `ct` stitched, with the builds it made as cut (its own scope) and in all (with the last
+/// remedy's new cuts).
+fn stitched(ct: &CutTooth) -> (FusedTooth, usize, usize) {
+    let all = ALL.with(Cell::get);
     let f = stitch_tooth(ct, &FuseOptions::default()).expect("the tooth stitches");
-    (f, LAST.with(Cell::get))
+    (f, LAST.with(Cell::get), ALL.with(Cell::get) - all)
 }
 
 #[test]
@@ -42,10 +44,10 @@ fn a_tooth_makes_at_most_its_allowed_builds_and_stays_closed() {
     // Every tooth within the cap; the one with the most builds is the test's.
     let mut most: Option<(&CutTooth, FusedTooth, usize)> = None;
     for ct in cut.teeth.values() {
-        let (f, n) = stitched(ct);
+        let (f, n, all) = stitched(ct);
         assert!(
-            (1..=MAX_BUILDS).contains(&n),
-            "tooth {}: {n} builds",
+            (1..=MAX_BUILDS).contains(&n) && all <= 2 * MAX_BUILDS,
+            "tooth {}: {n} builds, {all} in all",
             ct.fdi
         );
         if most.as_ref().is_none_or(|m| n > m.2) {
@@ -57,16 +59,19 @@ fn a_tooth_makes_at_most_its_allowed_builds_and_stays_closed() {
     // A cap the tooth does not reach changes nothing.
     {
         let _l = Limit::set(n);
-        let (f, m) = stitched(ct);
+        let (f, m, _) = stitched(ct);
         assert_eq!(m, n);
         assert_eq!(f.mesh, full.mesh);
         assert_eq!(f.source, full.source);
     }
     // Lower caps: no build beyond them, and the tooth is still one closed manifold.
+    // (The last remedy's new cuts, for a tooth the capped builds leave crossed, have a cap of
+    // their own.)
     for cap in [1, 2, n / 2] {
         let _l = Limit::set(cap);
-        let (f, m) = stitched(ct);
+        let (f, m, all) = stitched(ct);
         assert!(m <= cap && m >= 1, "cap {cap}: {m} builds");
+        assert!(all <= 2 * cap, "cap {cap}: {all} builds in all");
         let q = &f.quality;
         assert!(
             q.closed && q.manifold && q.components == 1,
