@@ -413,12 +413,7 @@ pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> R
         .chords
         .iter()
         .copied()
-        .chain(
-            ct.chords
-                .iter()
-                .copied()
-                .filter(|c| matches!(c.0, BandVertex::Lower(_))),
-        )
+        .chain(ct.root_chords())
         .collect();
     let loops = BandLoops {
         upper: &upper_pts,

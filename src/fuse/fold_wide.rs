@@ -82,12 +82,7 @@ pub(super) fn wider_fold(ct: &CutTooth, reach: f64) -> Option<CutTooth> {
     ));
     let chords = loop_chords(&crown, &margin, BandVertex::Upper)
         .into_iter()
-        .chain(
-            ct.chords
-                .iter()
-                .copied()
-                .filter(|c| matches!(c.0, BandVertex::Lower(_))),
-        )
+        .chain(ct.root_chords())
         .collect();
     Some(CutTooth {
         crown_dirs: loop_dirs(&crown, &margin, ct.frame.axis),

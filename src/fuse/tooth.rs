@@ -176,6 +176,14 @@ impl CutTooth {
     pub fn cut_ms(&self) -> f64 {
         self.cut_ms
     }
+
+    /// The chords of the root's cut loop (the crown's are the crown side's).
+    pub(super) fn root_chords(&self) -> impl Iterator<Item = (BandVertex, BandVertex)> + '_ {
+        self.chords
+            .iter()
+            .copied()
+            .filter(|c| matches!(c.0, BandVertex::Lower(_)))
+    }
 }
 
 /// Unit surface directions across a loop: `normal × tangent`, signed to point along `+axis`.
