@@ -37,6 +37,20 @@ pub(super) struct CrownSide {
 }
 
 impl CrownSide {
+    /// `ct` with this crown side as its crown: crown, margin, directions, the crown's chords
+    /// (with the root's), IOS indices and `kept_ios` from this side, the rest as `ct` has it.
+    pub(super) fn into_tooth(self, ct: &CutTooth) -> CutTooth {
+        CutTooth {
+            kept_ios: self.ios_vertex.iter().filter(|&&s| s != u32::MAX).count(),
+            chords: self.chords.into_iter().chain(ct.root_chords()).collect(),
+            crown: self.crown,
+            margin: self.margin,
+            crown_dirs: self.dirs,
+            ios_vertex: self.ios_vertex,
+            ..ct.clone()
+        }
+    }
+
     /// This crown's fringe trimmed for the `listed` faces ([`super::fringe::trim_fringe`]) by
     /// the first of `modes` that removes anything; `None` for an empty list or when none does.
     pub(super) fn trim(

@@ -18,12 +18,11 @@
 //! [`super::build_budget::MAX_BUILDS`] builds.
 
 use super::FuseOptions;
-use super::assembly::{Remedied, add_trim, crossings_left, remedied};
+use super::assembly::{Remedied, add_trim, crossings_left, remedied, trimmed_side};
 use super::fringe::Listed;
 use super::remedy::LAST_RESORT_REACH;
-use super::tooth::{CutTooth, loop_chords, loop_dirs};
+use super::tooth::CutTooth;
 use crate::mesh::boundary_loops;
-use crate::stitch::BandVertex;
 
 /// The builds and remedies of `ct` made again on its crown with the fold trimmed at the wider
 /// reaches ([`wider_fold`]), the first that leaves no crossing or else the one that leaves the
@@ -69,32 +68,16 @@ pub(super) fn wider_fold(ct: &CutTooth, reach: f64) -> Option<CutTooth> {
         &[],
         Listed::Within,
     )?;
-    let margin = match boundary_loops(&crown).as_slice() {
-        [margin] => margin.clone(),
-        _ => return None,
-    };
-    let mut trimmed = ct.trimmed;
-    add_trim(&mut trimmed, &t);
-    let mut warnings = ct.warnings.clone();
-    warnings.push(format!(
+    if boundary_loops(&crown).len() != 1 {
+        return None;
+    }
+    let mut tooth = trimmed_side(ct, crown, map).into_tooth(ct);
+    add_trim(&mut tooth.trimmed, &t);
+    tooth.warnings.push(format!(
         "the band crossed a fold of the crown after every remedy: the fold trimmed again within {reach:.2} mm of the margin ({} more IOS crown vertices, {} faces, at most {:.2} mm from the margin)",
         t.vertices, t.faces, t.max_reach_mm
     ));
-    let chords = loop_chords(&crown, &margin, BandVertex::Upper)
-        .into_iter()
-        .chain(ct.root_chords())
-        .collect();
-    Some(CutTooth {
-        crown_dirs: loop_dirs(&crown, &margin, ct.frame.axis),
-        kept_ios: map.iter().filter(|&&s| s != u32::MAX).count(),
-        margin,
-        crown,
-        ios_vertex: map,
-        trimmed,
-        chords,
-        warnings,
-        ..ct.clone()
-    })
+    Some(tooth)
 }
 
 #[cfg(test)]

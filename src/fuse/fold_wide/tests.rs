@@ -4,6 +4,7 @@
 use super::*;
 use crate::fuse::cut_jaw;
 use crate::phantom::{IosExport, Phantom, PhantomOptions};
+use crate::stitch::BandVertex;
 use std::collections::BTreeMap;
 
 /// Per IOS input vertex of a crown: its position (the crown's vertices by `ios_vertex`).
