@@ -8,7 +8,10 @@
 //! kept vertex and face is kept bitwise; the crown's own crossings farther up are the input's and
 //! stay.
 
-use crate::mesh::{RepairOptions, TriMesh, boundary_loops, repair_open_surface, sorted_corners};
+use crate::mesh::{
+    EdgeTopology, RepairOptions, TakenAway, TriMesh, boundary_loops_of, is_repaired,
+    repair_open_surface, repair_taken, sorted_corners, taken_away,
+};
 pub use crate::mesh_check::crossing_pairs;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -112,12 +115,37 @@ pub fn trim_fringe(
     extra: &[u32],
     listed_mode: Listed,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
-    trim_rounds(crown, src, dist_in, reach, extra, listed_mode, true)
+    trim_rounds(
+        crown,
+        src,
+        dist_in,
+        reach,
+        extra,
+        listed_mode,
+        Shortcuts::ALL,
+    )
 }
 
-/// [`trim_fringe`], with `carry` whether a round takes the crossing pairs from the round before
-/// where it can (see [`carried_pairs`]) instead of searching the crown for them again (the same
-/// trim either way; the tests compare both).
+/// Work [`trim_rounds`] may spare where it can prove the result the same (the tests compare
+/// every combination).
+#[derive(Clone, Copy, Debug)]
+struct Shortcuts {
+    /// A round takes the crossing pairs from the round before where it can (see
+    /// [`carried_pairs`]) instead of searching the crown for them again.
+    carry_pairs: bool,
+    /// A peel off a crown the repair would leave as it is repairs only what the removal can
+    /// have changed ([`taken_away`], [`repair_taken`]) instead of the whole crown.
+    skip_repair: bool,
+}
+
+impl Shortcuts {
+    const ALL: Shortcuts = Shortcuts {
+        carry_pairs: true,
+        skip_repair: true,
+    };
+}
+
+/// [`trim_fringe`], with the `shortcuts` it takes (the same trim with any of them).
 fn trim_rounds(
     crown: &TriMesh,
     src: &[u32],
@@ -125,7 +153,7 @@ fn trim_rounds(
     reach: f64,
     extra: &[u32],
     listed_mode: Listed,
-    carry: bool,
+    shortcuts: Shortcuts,
 ) -> Option<(TriMesh, Vec<u32>, FringeTrim)> {
     let mut mesh = crown.clone();
     let mut map = src.to_vec();
@@ -140,6 +168,10 @@ fn trim_rounds(
     // The crossing pairs with a face of the last round's fringe, renumbered for the crown as it
     // is now, when the peel allows (see `carried_pairs`).
     let mut carried: Option<Vec<(u32, u32)>> = None;
+    // The crown's topology when a peel has built it, and whether the crown is known to be one
+    // the repair would leave as it is ([`is_repaired`]; `None`: not looked at yet).
+    let mut topo: Option<EdgeTopology> = None;
+    let mut repaired: Option<bool> = None;
     for _ in 0..4 {
         report.rounds += 1;
         let round = Round {
@@ -149,7 +181,10 @@ fn trim_rounds(
             reach,
             listed: &listed,
             mode: listed_mode,
-            topo: std::cell::OnceCell::new(),
+            topo: topo
+                .take()
+                .map(std::cell::OnceCell::from)
+                .unwrap_or_default(),
         };
         let (fringe, is_fringe) = round.fringe();
         let pairs = match carried.take() {
@@ -166,16 +201,29 @@ fn trim_rounds(
             break;
         }
         let mut remove = round.removal(&is_fringe, &bad);
-        listed.clear();
-        let Some(p) = peel(&mesh, &map, &mut remove, dist_in, reach) else {
+        let known = shortcuts.skip_repair
+            && *repaired.get_or_insert_with(|| is_repaired(&mesh, round.topo()));
+        let Some(p) = peel(
+            &mesh,
+            &map,
+            &mut remove,
+            dist_in,
+            reach,
+            known.then(|| round.topo()),
+        ) else {
             break;
         };
-        if carry && let Some(old_of_new) = &p.face_of {
+        listed.clear();
+        if shortcuts.carry_pairs
+            && let Some(old_of_new) = &p.face_of
+        {
             carried = Some(carried_pairs(&pairs, old_of_new, mesh.triangles.len()));
         }
         report.faces += p.removed;
         map = p.map;
         mesh = p.crown;
+        topo = Some(p.topo);
+        repaired = p.repaired.then_some(true);
     }
     if report.faces == 0 {
         return None;
@@ -413,6 +461,11 @@ struct Peeled {
     /// Per face of `crown`, its index in the crown before the peel, where the repair only took
     /// faces away (no vertex split, no face turned, nothing added); `None` otherwise.
     face_of: Option<Vec<u32>>,
+    /// The trimmed crown's topology.
+    topo: EdgeTopology,
+    /// Whether the trimmed crown is known to be one the repair would leave as it is (it was
+    /// taken from such a crown without needing the repair, see [`taken_away`]).
+    repaired: bool,
 }
 
 /// Per face of `rep` (the repair of `cut`, the crown's faces left by `remove`, with `rep_src`
@@ -441,6 +494,12 @@ fn faces_kept(
         .collect()
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Peels on this thread that did not repair the whole crown (tests: the shortcut is taken).
+    static SPARED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// Times [`peel`] puts back the marked faces at a pinch and tries again.
 const PEEL_RETRIES: usize = 4;
 
@@ -450,12 +509,16 @@ const PEEL_RETRIES: usize = 4;
 /// that holds a vertex beyond the reach, the marked faces touching the culprit vertices (those
 /// of the extra loops, or of the dropped pieces) are kept instead and the rest is tried again,
 /// so that one pinching face does not hold back the whole round. `None` when nothing can go.
+/// `repaired`: `mesh`'s topology when `mesh` is one the repair would leave as it is; then a
+/// removal [`taken_away`] can vouch for is not repaired (the repair would only drop the unused
+/// vertices: the same crown).
 fn peel(
     mesh: &TriMesh,
     map: &[u32],
     remove: &mut [bool],
     dist_in: &[f64],
     reach: f64,
+    repaired: Option<&EdgeTopology>,
 ) -> Option<Peeled> {
     let n = mesh.positions.len();
     let mut used = vec![false; n];
@@ -477,12 +540,34 @@ fn peel(
             return None;
         }
         let cut = TriMesh::new(mesh.positions.clone(), kept);
-        let (rep, rep_src, done) = repair_open_surface(
-            &cut,
-            &RepairOptions {
-                max_hole_fraction: 0.0,
-            },
-        );
+        #[cfg(test)]
+        if repaired.is_some() {
+            SPARED.with(|s| s.set(s.get() + 1));
+        }
+        let taken = repaired.and_then(|topo| taken_away(mesh, topo, remove));
+        let fast = taken.is_some();
+        let (rep, rep_src, done, rep_topo, loops) = match taken {
+            Some(TakenAway {
+                mesh,
+                source,
+                topo,
+                loops,
+            }) => (mesh, source, Default::default(), topo, loops),
+            None => {
+                let (rep, rep_src, done) = match repaired {
+                    Some(topo) => repair_taken(mesh, topo, remove),
+                    None => repair_open_surface(
+                        &cut,
+                        &RepairOptions {
+                            max_hole_fraction: 0.0,
+                        },
+                    ),
+                };
+                let topo = EdgeTopology::new(&rep);
+                let loops = boundary_loops_of(&topo);
+                (rep, rep_src, done, topo, loops)
+            }
+        };
         let mut present = vec![false; n];
         for &s in rep_src.iter().filter(|&&s| s != u32::MAX) {
             present[s as usize] = true;
@@ -509,7 +594,6 @@ fn peel(
                 *c |= used[v] && !present[v] && far(v);
             }
         }
-        let loops = boundary_loops(&rep);
         if loops.len() > 1 {
             let longest = (0..loops.len())
                 .max_by_key(|&i| (loops[i].len(), Reverse(i)))
@@ -550,6 +634,8 @@ fn peel(
                 map: next,
                 removed,
                 face_of,
+                topo: rep_topo,
+                repaired: fast,
             });
         }
         let mut restored = 0;

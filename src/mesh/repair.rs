@@ -132,10 +132,58 @@ fn repair_once(
     let faces = distinct_faces(mesh, &mut rep);
     // 2. At most two faces per undirected edge (greedy in face order).
     let kept = two_faces_per_edge(faces, n, &mut rep);
-    let mut m = TriMesh::new(mesh.positions.clone(), kept);
+    let m = TriMesh::new(mesh.positions.clone(), kept);
+    let topo = EdgeTopology::new(&m);
+    repair_rest(m, topo, opts, holes, rep)
+}
+
+/// [`repair_open_surface`] without hole filling of `mesh` less the faces marked in `remove`,
+/// where `mesh` is a surface [`super::is_repaired`] says yes to and `topo` its topology: the
+/// same mesh, map and report, with less work. Such a surface has no face with a bad corner or
+/// no area, none twice and no edge of three faces, and taking faces away cannot make one, so
+/// the first two steps would keep every face (and count nothing); and the faces left have the
+/// surface's half-edges less the removed faces', in the same order.
+pub(crate) fn repair_taken(
+    mesh: &TriMesh,
+    topo: &EdgeTopology,
+    remove: &[bool],
+) -> (TriMesh, Vec<u32>, RepairReport) {
+    let kept: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .zip(remove)
+        .filter(|(_, r)| !**r)
+        .map(|(t, _)| *t)
+        .collect();
+    let m = TriMesh::new(mesh.positions.clone(), kept);
+    let topo = topo.without_faces(remove);
+    let opts = RepairOptions {
+        max_hole_fraction: 0.0,
+    };
+    let mut rims = Vec::new();
+    let (m, source, rep, crossed) = repair_rest(
+        m,
+        topo,
+        &opts,
+        Holes::BySize(&mut rims),
+        RepairReport::default(),
+    );
+    debug_assert!(crossed.is_empty(), "no hole is capped without hole filling");
+    (m, source, rep)
+}
+
+/// Steps 3 to 7 of [`repair_once`] on `m` (after the first two steps; `topo` its topology,
+/// `rep` what those steps counted).
+fn repair_rest(
+    mut m: TriMesh,
+    topo: EdgeTopology,
+    opts: &RepairOptions,
+    holes: Holes,
+    mut rep: RepairReport,
+) -> (TriMesh, Vec<u32>, RepairReport, Vec<u32>) {
+    let n = m.positions.len();
     // 3. Largest component only. The edge topology is kept for the later steps while the
     // triangles stay exactly as they are (the usual clean crown).
-    let topo = EdgeTopology::new(&m);
     let (ids, count) = connected_components_of(&topo, m.triangles.len());
     // Consistent here, consistent after the islands go (fewer faces use no directed edge twice).
     let consistent = orientation_consistent(&topo);

@@ -138,6 +138,41 @@ impl EdgeTopology {
         on
     }
 
+    /// The topology of the mesh less the faces marked in `remove` (faces renumbered in order,
+    /// vertices as they are): what [`EdgeTopology::new`] builds for it, from this one by
+    /// dropping the removed faces' half-edges (the order of the rest is kept).
+    pub fn without_faces(&self, remove: &[bool]) -> Self {
+        let mut new_face = Vec::with_capacity(remove.len());
+        let mut next = 0u32;
+        for &r in remove {
+            new_face.push(next);
+            next += u32::from(!r);
+        }
+        let half_edges: Vec<(u32, u32, u32)> = self
+            .half_edges
+            .iter()
+            .filter(|e| !remove[e.2 as usize])
+            .map(|&(a, b, f)| (a, b, new_face[f as usize]))
+            .collect();
+        // As `new`: one entry per vertex up to the highest one still used.
+        let n = half_edges
+            .iter()
+            .map(|e| e.0.max(e.1) as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut offsets = vec![0u32; n + 1];
+        for e in &half_edges {
+            offsets[e.0 as usize + 1] += 1;
+        }
+        for v in 0..n {
+            offsets[v + 1] += offsets[v];
+        }
+        Self {
+            half_edges,
+            offsets,
+        }
+    }
+
     /// Directed boundary half-edges: `a → b` present with no `b → a` partner, sorted.
     pub fn boundary_half_edges(&self) -> Vec<(u32, u32)> {
         // Every half-edge reversed, `(b, a)` for `a → b`, sorted: a stable counting sort by

@@ -190,19 +190,32 @@ pub fn non_manifold_vertices(mesh: &TriMesh) -> Vec<u32> {
     non_manifold_vertices_of(mesh, &EdgeTopology::new(mesh))
 }
 
-/// [`non_manifold_vertices`] from an already built topology of `mesh`. A vertex's corners are
-/// its leaving half-edges `v → next` (face `f`, whose third corner is `prev`); two corners are
-/// in one fan when they share a neighbour vertex (an edge through `v`), transitively.
+/// [`non_manifold_vertices`] from an already built topology of `mesh`.
 pub fn non_manifold_vertices_of(mesh: &TriMesh, topo: &EdgeTopology) -> Vec<u32> {
-    let mut out = Vec::new();
-    let mut prev: Vec<u32> = Vec::new();
-    let mut parent: Vec<usize> = Vec::new();
-    let mut nb: Vec<(u32, usize)> = Vec::new();
-    for v in 0..mesh.positions.len() as u32 {
-        let block = topo.leaving(v);
-        if block.is_empty() {
-            continue;
-        }
+    let mut scratch = FanScratch::default();
+    (0..mesh.positions.len() as u32)
+        .filter(|&v| {
+            let block = topo.leaving(v);
+            !block.is_empty() && !scratch.one_fan(mesh, v, block)
+        })
+        .collect()
+}
+
+/// Reusable buffers of [`FanScratch::one_fan`], so that testing many vertices allocates once.
+#[derive(Default)]
+pub(crate) struct FanScratch {
+    prev: Vec<u32>,
+    parent: Vec<usize>,
+    nb: Vec<(u32, usize)>,
+}
+
+impl FanScratch {
+    /// Whether the corners `block` of vertex `v` (its leaving half-edges `v → next` of faces of
+    /// `mesh`, sorted by `next`, not empty) form one edge-connected fan. A corner's face `f`
+    /// has `prev` as its third corner; two corners are in one fan when they share a neighbour
+    /// vertex (an edge through `v`), transitively.
+    pub(crate) fn one_fan(&mut self, mesh: &TriMesh, v: u32, block: &[(u32, u32, u32)]) -> bool {
+        let (prev, parent, nb) = (&mut self.prev, &mut self.parent, &mut self.nb);
         prev.clear();
         // The half-edge is `t[k] → t[k + 1]` for some k, so the third corner `t[k + 2]` is the
         // exclusive or of all three with both ends (whatever corners repeat).
@@ -210,8 +223,8 @@ pub fn non_manifold_vertices_of(mesh: &TriMesh, topo: &EdgeTopology) -> Vec<u32>
             let t = mesh.triangles[f as usize];
             t[0] ^ t[1] ^ t[2] ^ v ^ b
         }));
-        if one_cycle(block, &prev) {
-            continue;
+        if one_cycle(block, prev) {
+            return true;
         }
         // General case: union the corners that share a neighbour vertex.
         let m = block.len();
@@ -225,23 +238,19 @@ pub fn non_manifold_vertices_of(mesh: &TriMesh, topo: &EdgeTopology) -> Vec<u32>
             x
         }
         nb.clear();
-        for (idx, (&(_, next, _), &pv)) in block.iter().zip(&prev).enumerate() {
+        for (idx, (&(_, next, _), &pv)) in block.iter().zip(prev.iter()).enumerate() {
             nb.push((next, idx));
             nb.push((pv, idx));
         }
         nb.sort_unstable();
         for w in nb.windows(2) {
             if w[0].0 == w[1].0 {
-                let (a, b) = (find(&mut parent, w[0].1), find(&mut parent, w[1].1));
+                let (a, b) = (find(parent, w[0].1), find(parent, w[1].1));
                 parent[a.max(b)] = a.min(b);
             }
         }
-        let roots = (0..m).filter(|&x| find(&mut parent, x) == x).count();
-        if roots > 1 {
-            out.push(v);
-        }
+        (0..m).filter(|&x| find(parent, x) == x).count() == 1
     }
-    out
 }
 
 /// A sufficient test that a vertex's corners form one fan: following each corner to the corner

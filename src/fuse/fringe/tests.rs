@@ -1,6 +1,7 @@
 //! Unit tests of the `fringe` module.
 
 use super::*;
+use crate::mesh::boundary_loops;
 use crate::mesh_check::triangles_intersect;
 use glam::DVec3;
 
@@ -104,34 +105,44 @@ fn a_removal_that_pinches_is_put_back_and_the_rest_goes() {
         .iter()
         .position(|t| t.contains(&13) && t.contains(&14))
         .unwrap();
-    let mut remove = vec![false; crown.triangles.len()];
-    for f in [0, under_tab, harmless] {
-        remove[f] = true;
-    }
-    let Peeled {
-        crown: rep,
-        map: next,
-        removed,
-        face_of,
-    } = peel(&crown, &map, &mut remove, &dist_in, 0.3).unwrap();
-    assert_eq!(removed, 1);
-    // Only the harmless face went: every other face kept, in order.
-    let others: Vec<u32> = (0..crown.triangles.len() as u32)
-        .filter(|&f| f as usize != harmless)
-        .collect();
-    assert_eq!(face_of, Some(others));
-    assert!(remove[harmless] && !remove[0] && !remove[under_tab]);
-    assert_eq!(rep.triangles.len(), crown.triangles.len() - 1);
-    assert_eq!(boundary_loops(&rep).len(), 1);
-    assert!(next.contains(&17));
-    // Alone, each of the two is refused.
-    for f in [0, under_tab] {
-        let mut only = vec![false; crown.triangles.len()];
-        only[f] = true;
-        assert!(
-            peel(&crown, &map, &mut only, &dist_in, 0.3).is_none(),
-            "face {f}"
-        );
+    // With the whole crown repaired after the removal, and with only what the removal changed
+    // (the ringed disk is a surface the repair leaves as it is).
+    let topo = EdgeTopology::new(&crown);
+    assert!(is_repaired(&crown, &topo));
+    for repaired in [None, Some(&topo)] {
+        let mut remove = vec![false; crown.triangles.len()];
+        for f in [0, under_tab, harmless] {
+            remove[f] = true;
+        }
+        let Peeled {
+            crown: rep,
+            map: next,
+            removed,
+            face_of,
+            topo: rep_topo,
+            repaired: known,
+        } = peel(&crown, &map, &mut remove, &dist_in, 0.3, repaired).unwrap();
+        assert_eq!(removed, 1);
+        assert_eq!(known, repaired.is_some());
+        assert_eq!(rep_topo.half_edges, EdgeTopology::new(&rep).half_edges);
+        // Only the harmless face went: every other face kept, in order.
+        let others: Vec<u32> = (0..crown.triangles.len() as u32)
+            .filter(|&f| f as usize != harmless)
+            .collect();
+        assert_eq!(face_of, Some(others));
+        assert!(remove[harmless] && !remove[0] && !remove[under_tab]);
+        assert_eq!(rep.triangles.len(), crown.triangles.len() - 1);
+        assert_eq!(boundary_loops(&rep).len(), 1);
+        assert!(next.contains(&17));
+        // Alone, each of the two is refused.
+        for f in [0, under_tab] {
+            let mut only = vec![false; crown.triangles.len()];
+            only[f] = true;
+            assert!(
+                peel(&crown, &map, &mut only, &dist_in, 0.3, repaired).is_none(),
+                "face {f}"
+            );
+        }
     }
 }
 
@@ -202,8 +213,9 @@ fn crossing_pairs_are_every_crossing_of_a_candidate() {
 }
 
 /// The crossing pairs a round takes over from the round before give the same trims as a search
-/// of the crown every round, on the rough phantom's crowns (folded slivers along the clipped
-/// margin, trimmed over several rounds) with the fringe alone and with listed faces.
+/// of the crown every round, and peels that skip the whole crown's repair the same as peels that
+/// repair it, on the rough phantom's crowns (folded slivers along the clipped margin, trimmed
+/// over several rounds) with the fringe alone and with listed faces.
 #[test]
 fn carried_pairs_trim_as_a_fresh_search_does() {
     use crate::phantom::{IosExport, Phantom, PhantomOptions};
@@ -211,6 +223,7 @@ fn carried_pairs_trim_as_a_fresh_search_does() {
     opts.realism.ios.rough = IosExport::Rough.roughness();
     let p = Phantom::generate(&opts).expect("phantom generates");
     let mut carried_rounds = 0;
+    let spared = SPARED.with(|s| s.get());
     for (fdi, crown) in p.ios_crowns().into_iter().take(6) {
         let inputs = crown.positions.len();
         let (crown, src, _) = repair_open_surface(&crown, &RepairOptions::default());
@@ -234,22 +247,33 @@ fn carried_pairs_trim_as_a_fresh_search_does() {
             .collect();
         for extra in [&[][..], &listed[..]] {
             for mode in [Listed::Within, Listed::Apex] {
-                let a = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, true);
-                let b = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, false);
                 let key = |r: &Option<(TriMesh, Vec<u32>, FringeTrim)>| {
                     r.as_ref().map(|(m, map, t)| {
                         (m.positions.clone(), m.triangles.clone(), map.clone(), *t)
                     })
                 };
-                assert_eq!(
-                    key(&a),
-                    key(&b),
-                    "tooth {fdi}, {mode:?}, {} listed",
-                    extra.len()
-                );
+                let a = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, Shortcuts::ALL);
+                for (carry_pairs, skip_repair) in [(false, false), (true, false), (false, true)] {
+                    let shortcuts = Shortcuts {
+                        carry_pairs,
+                        skip_repair,
+                    };
+                    let b = trim_rounds(&crown, &src, &dist_in, 0.3, extra, mode, shortcuts);
+                    assert_eq!(
+                        key(&a),
+                        key(&b),
+                        "tooth {fdi}, {mode:?}, {} listed, {shortcuts:?}",
+                        extra.len()
+                    );
+                }
                 carried_rounds += a.map_or(0, |(_, _, t)| t.rounds.saturating_sub(1));
             }
         }
     }
     assert!(carried_rounds > 0, "some trim ran more than one round");
+    let spared = SPARED.with(|s| s.get()) - spared;
+    assert!(
+        spared > 10,
+        "{spared} peels spared the whole crown's repair"
+    );
 }
