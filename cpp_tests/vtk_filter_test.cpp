@@ -282,6 +282,46 @@ TEST(VtkToothfuseFilter, FusesDemoJawInIosFrameKeepingEveryCrownVertex) {
   }
 }
 
+// MaxThreads 1 runs the update on the calling thread: the same output, point for point and
+// triangle for triangle, as an update on as many threads as the CPUs allow.
+TEST(VtkToothfuseFilter, OneThreadGivesTheSameOutput) {
+  Demo& d = demo(2);
+  ASSERT_TRUE(d.ok);
+  auto run = [&](int threads) {
+    vtkNew<vtkToothfuseFilter> f;
+    ErrorSink errors(f);
+    f->SetIOSInputData(d.iosPd);
+    f->SetCBCTInputData(d.cbctPd);
+    f->SetCBCTLabelArrayName("tooth");
+    f->SetMaxThreads(threads);
+    EXPECT_EQ(f->GetMaxThreads(), threads < 0 ? 0 : threads);
+    f->Update();
+    EXPECT_TRUE(errors.messages.empty()) << errors.messages.front();
+    auto out = vtkSmartPointer<vtkPolyData>::New();
+    out->ShallowCopy(f->GetOutput());
+    return out;
+  };
+  vtkSmartPointer<vtkPolyData> one = run(1), free = run(0);
+  run(-3);  // clamped to 0
+  ASSERT_GT(one->GetNumberOfPoints(), 1000);
+  ASSERT_EQ(one->GetNumberOfPoints(), free->GetNumberOfPoints());
+  ASSERT_EQ(one->GetNumberOfCells(), free->GetNumberOfCells());
+  for (vtkIdType i = 0; i < one->GetNumberOfPoints(); i++) {
+    double a[3], b[3];
+    one->GetPoint(i, a);
+    free->GetPoint(i, b);
+    ASSERT_TRUE(a[0] == b[0] && a[1] == b[1] && a[2] == b[2]) << "point " << i;
+  }
+  for (vtkIdType c = 0; c < one->GetNumberOfCells(); c++) {
+    vtkIdType na = 0, nb = 0;
+    const vtkIdType *pa = nullptr, *pb = nullptr;
+    one->GetCellPoints(c, na, pa);
+    free->GetCellPoints(c, nb, pb);
+    ASSERT_EQ(na, nb);
+    for (vtkIdType k = 0; k < na; k++) ASSERT_EQ(pa[k], pb[k]) << "cell " << c;
+  }
+}
+
 // jaw_7: seed 8, partial lower arch (3 teeth; a tooth whose fusion fails is reported skipped).
 TEST(VtkToothfuseFilter, FusesDemoJawInCbctFrameWithCbctRootPoints) {
   Demo& d = demo(7);

@@ -1200,6 +1200,19 @@ toothfuse_status toothfuse_session_set_ios_repair(struct toothfuse_session *sess
                                                   double max_hole_fraction);
 
 /**
+ * Caps the threads this session's calls use at `max_threads` in all, the calling thread's
+ * included (0, the default: no cap; the library then takes as many threads as the CPUs the
+ * process may run on allow, at most 4 per step). With 1 every call runs on the calling thread
+ * and spawns none: for hosts that run the library inside their own worker threads. The results
+ * are the same bit for bit whatever the cap. Other sessions are not affected.
+ *
+ * # Safety
+ * `session` must be NULL or a live session.
+ */
+toothfuse_status toothfuse_session_set_max_threads(struct toothfuse_session *session,
+                                                   uint32_t max_threads);
+
+/**
  * Removes tooth `fdi` of `modality`; TOOTHFUSE_STATUS_MISSING_DATA if it is not held.
  *
  * # Safety

@@ -35,6 +35,7 @@ pub mod ffi;
 pub use error::{Error, ErrorKind, Result};
 pub use geom::Rigid;
 pub use mesh::TriMesh;
+pub use par::{max_threads, with_max_threads};
 
 /// The library version, from Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

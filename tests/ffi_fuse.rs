@@ -329,3 +329,69 @@ fn fuse_registered_reuses_the_registration_bit_for_bit() {
         assert_eq!(one_call.2, two_step[k].2, "tooth {f}: sources");
     }
 }
+
+/// The report JSON of the last fuse, its timings left out.
+fn report_without_timing(s: &Session) -> serde_json::Value {
+    let mut len = 0usize;
+    // SAFETY: live session; size query then copy.
+    let json = unsafe {
+        assert_eq!(
+            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
+            toothfuse_status::Ok
+        );
+        let mut buf = vec![0 as std::ffi::c_char; len + 1];
+        assert_eq!(
+            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
+            toothfuse_status::Ok
+        );
+        CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned()
+    };
+    let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    v["timing_ms"] = serde_json::Value::Null;
+    v
+}
+
+/// A session capped at one thread (everything on the caller's thread) fuses what an uncapped
+/// one does, bit for bit; the cap is per session; a NULL session is refused.
+#[test]
+fn a_session_capped_at_one_thread_fuses_the_same() {
+    let p = phantom(3);
+    let (capped, free) = (Session::new(), Session::new());
+    // SAFETY: live sessions, or NULL.
+    unsafe {
+        assert_eq!(
+            toothfuse_session_set_max_threads(ptr::null_mut(), 1),
+            toothfuse_status::NullParameter
+        );
+        assert_eq!(
+            toothfuse_session_set_max_threads(capped.0, 1),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_set_max_threads(free.0, 3),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_set_max_threads(free.0, 0),
+            toothfuse_status::Ok
+        );
+    }
+    for s in [&capped, &free] {
+        add_phantom(s, &p);
+        // SAFETY: live session, NULL options = defaults.
+        let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    }
+    let fdis = fused_teeth(&capped);
+    assert!(fdis.len() >= 3, "{fdis:?}");
+    assert_eq!(fdis, fused_teeth(&free));
+    for fdi in fdis.into_iter().chain([0]) {
+        let (a, b) = (fused(&capped, fdi), fused(&free, fdi));
+        let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+            v.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+        };
+        assert_eq!(bits(&a.0), bits(&b.0), "tooth {fdi}: positions");
+        assert_eq!((a.1, a.2), (b.1, b.2), "tooth {fdi}: indices and sources");
+    }
+    assert_eq!(report_without_timing(&capped), report_without_timing(&free));
+}

@@ -343,6 +343,8 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
     return 0;
   };
 
+  st = toothfuse_session_set_max_threads(s, static_cast<uint32_t>(this->MaxThreads));
+  if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_max_threads");
   if (this->IOSRepair) {
     st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction);
     if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_ios_repair");
@@ -477,6 +479,7 @@ void vtkToothfuseFilter::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "IOSRepair: " << this->IOSRepair << " (MaxHoleFraction "
      << this->MaxHoleFraction << ")\n";
   os << indent << "AcceptQuestionable: " << this->AcceptQuestionable << "\n";
+  os << indent << "MaxThreads: " << this->MaxThreads << "\n";
   os << indent << "LastStatus: " << this->LastStatus << "\n";
   os << indent << "FusedTeeth: " << this->FusedTeeth.size()
      << ", SkippedTeeth: " << this->SkippedTeeth.size() << "\n";

@@ -124,6 +124,12 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   vtkGetMacro(AcceptQuestionable, bool);
   vtkBooleanMacro(AcceptQuestionable, bool);
 
+  /// Most threads an update uses in all, the calling thread's included (0, the default: as many
+  /// as the CPUs allow, at most 4 per step; 1: everything on the calling thread, none spawned).
+  /// The output is the same bit for bit whatever the value.
+  vtkSetClampMacro(MaxThreads, int, 0, 1 << 20);
+  vtkGetMacro(MaxThreads, int);
+
   /// The toothfuse status of the last update (TOOTHFUSE_STATUS_OK = 0 after a success; e.g.
   /// TOOTHFUSE_STATUS_UNIT_MISMATCH for input not in millimetres).
   int GetLastStatus() const { return this->LastStatus; }
@@ -155,6 +161,7 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   bool IOSRepair = false;
   double MaxHoleFraction = 0.5;
   bool AcceptQuestionable = false;
+  int MaxThreads = 0;
   int LastStatus = 0;
 
   std::vector<int> FusedTeeth;

@@ -42,6 +42,9 @@ pub struct toothfuse_session {
     pub(crate) core: Session,
     last_error: RefCell<CString>,
     poisoned: Cell<bool>,
+    /// The cap on the threads of this session's calls (0: none), see
+    /// `toothfuse_session_set_max_threads`.
+    max_threads: Cell<usize>,
 }
 
 impl toothfuse_session {
@@ -50,6 +53,7 @@ impl toothfuse_session {
             core: Session::new(),
             last_error: RefCell::new(CString::default()),
             poisoned: Cell::new(false),
+            max_threads: Cell::new(0),
         }
     }
 
@@ -92,8 +96,8 @@ impl toothfuse_session {
     }
 }
 
-/// Runs `f` on the session behind `ptr` for reading: NULL check, poison check, panic capture,
-/// last-error bookkeeping.
+/// Runs `f` on the session behind `ptr` for reading: NULL check, poison check, the session's
+/// thread cap, panic capture, last-error bookkeeping.
 ///
 /// # Safety
 /// `ptr` must be NULL or a live session from `toothfuse_session_new`, not used concurrently.
@@ -108,7 +112,10 @@ where
     if let Err(f) = s.check_poison() {
         return s.finish(Ok(Err(f)));
     }
-    let outcome = catch_unwind(AssertUnwindSafe(|| f(&s.core)));
+    let cap = s.max_threads.get();
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        crate::par::with_max_threads(cap, || f(&s.core))
+    }));
     s.finish(outcome)
 }
 
@@ -128,7 +135,10 @@ where
     if let Err(f) = s.check_poison() {
         return s.finish(Ok(Err(f)));
     }
-    let outcome = catch_unwind(AssertUnwindSafe(|| f(&mut s.core)));
+    let cap = s.max_threads.get();
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        crate::par::with_max_threads(cap, || f(&mut s.core))
+    }));
     s.finish(outcome)
 }
 
@@ -371,6 +381,32 @@ pub unsafe extern "C" fn toothfuse_session_set_ios_repair(
         };
         // SAFETY: forwarded contract on `session`.
         unsafe { with_session_mut(session, body) }
+    }
+}
+
+/// Caps the threads this session's calls use at `max_threads` in all, the calling thread's
+/// included (0, the default: no cap; the library then takes as many threads as the CPUs the
+/// process may run on allow, at most 4 per step). With 1 every call runs on the calling thread
+/// and spawns none: for hosts that run the library inside their own worker threads. The results
+/// are the same bit for bit whatever the cap. Other sessions are not affected.
+///
+/// # Safety
+/// `session` must be NULL or a live session.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn toothfuse_session_set_max_threads(
+    session: *mut toothfuse_session,
+    max_threads: u32,
+) -> toothfuse_status {
+    ffi_panic_boundary! {
+        // SAFETY: the caller guarantees `session` is NULL or a live session nobody else uses now.
+        let Some(s) = (unsafe { session.as_ref() }) else {
+            return toothfuse_status::NullParameter;
+        };
+        if let Err(f) = s.check_poison() {
+            return s.finish(Ok(Err(f)));
+        }
+        s.max_threads.set(max_threads as usize);
+        s.finish(Ok(Ok(())))
     }
 }
 

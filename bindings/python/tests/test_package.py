@@ -120,6 +120,25 @@ def test_fuse_a_demo_jaw_read_from_files():
     assert all(q["watertight"] for q in jaw.quality.values()), jaw.quality
 
 
+def test_fuse_on_one_thread_is_the_same():
+    """max_threads=1 runs the whole call on the calling thread: the same jaw bit for bit; a
+    negative cap is refused before reaching the library."""
+    d = jaw_dir(2)
+    ios = toothfuse.read_mesh(d / "ios.ply")
+    cbct = toothfuse.read_mesh(d / "cbct.ply")
+    args = (ios.positions, ios.triangles, ios.labels, cbct.positions, cbct.triangles, cbct.labels)
+    one = toothfuse.fuse(*args, max_threads=1)
+    free = toothfuse.fuse(*args)
+    assert one.teeth == free.teeth and len(one.teeth) >= 3
+    assert one.positions.tobytes() == free.positions.tobytes()
+    assert np.array_equal(one.triangles, free.triangles)
+    assert np.array_equal(one.labels, free.labels)
+    with toothfuse.Session() as s:
+        with pytest.raises(ValueError):
+            s.set_max_threads(-1)
+        s.set_max_threads(2)
+
+
 def test_per_jaw_volume_is_split_with_the_ios_added_first():
     """A DentalSegmentator-style volume (3 upper teeth, 4 lower teeth) is split into teeth with
     the IOS crowns the session holds: without them it is refused, naming what to do, and the

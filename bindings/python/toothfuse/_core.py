@@ -149,6 +149,7 @@ _d_p = ctypes.POINTER(ctypes.c_double)
 _add_volume = _fn("toothfuse_session_add_label_volume", _st, _S, _size_p, _d_p, _d_p, _d_p,
                   ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint32, _size_p)
 _set_repair = _fn("toothfuse_session_set_ios_repair", _st, _S, ctypes.c_bool, ctypes.c_double)
+_set_threads = _fn("toothfuse_session_set_max_threads", _st, _S, ctypes.c_uint32)
 _remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
 _count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
 _list = _fn("toothfuse_session_list_teeth", _st, _S, ctypes.c_uint32, _i32_p, ctypes.c_size_t,
@@ -397,6 +398,13 @@ class Session:
     def set_ios_repair(self, enabled, max_hole_fraction=0.5):
         """Repair IOS crowns on entry (real scans need it); off by default."""
         self._check(_set_repair(self._h, enabled, max_hole_fraction))
+
+    def set_max_threads(self, n):
+        """Caps the threads this session's calls use at n in all (0, the default: no cap; 1: every
+        call on the calling thread). The results are the same bit for bit whatever the cap."""
+        if not 0 <= int(n) < 2**32:
+            raise ValueError(f"max_threads {n} is not in [0, 2**32)")
+        self._check(_set_threads(self._h, int(n)))
 
     def remove_tooth(self, modality, fdi):
         """Removes a held tooth."""
@@ -689,7 +697,8 @@ class FusedJaw:
 
 def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles, cbct_labels,
          *, ios_per_face=False, cbct_per_face=False, preset="default", frame="cbct",
-         ios_repair=False, max_hole_fraction=0.5, as_numpy=None, accept_questionable=False):
+         ios_repair=False, max_hole_fraction=0.5, as_numpy=None, accept_questionable=False,
+         max_threads=0):
     """One call: a labeled IOS jaw (FDI per vertex, or per face with ios_per_face; 0 =
     gingiva) and labeled CBCT teeth (one mesh with FDI labels; every tooth closed) -> FusedJaw.
     ios_repair repairs real-scan crowns on entry. Results are numpy arrays when as_numpy is
@@ -698,8 +707,11 @@ def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles,
     STATUS_UNIT_MISMATCH for wrong units, STATUS_MIRRORED for a mirrored modality,
     STATUS_REGISTRATION_REJECTED for data that do not belong together (another patient, the other
     jaw, shifted labels). accept_questionable=True registers such data anyway; the result's
-    `questionable` is then True and report["questionable_findings"] names the findings."""
+    `questionable` is then True and report["questionable_findings"] names the findings.
+    max_threads caps the threads the call uses (0: no cap; 1: all on the calling thread); the
+    results are the same whatever it is."""
     with Session() as s:
+        s.set_max_threads(max_threads)
         if ios_repair:
             s.set_ios_repair(True, max_hole_fraction)
         s.add_jaw(IOS, ios_vertices, ios_triangles, ios_labels, per_face=ios_per_face)

@@ -109,13 +109,19 @@ impl InputArgs {
                 .with_context(|| format!("reading CBCT {}", cbct.display()))
         };
         // The two files are independent: read side by side (most of a fresh process's reading
-        // is the kernel handing it new pages), the IOS's error first when both fail.
-        let (ios_read, cbct_read) = std::thread::scope(|s| {
-            let c = s.spawn(read_cbct);
-            let i = read_ios_here();
-            let c = c.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-            (i, c)
-        });
+        // is the kernel handing it new pages), the IOS's error first when both fail; one after
+        // the other under `--threads 1`.
+        let cap = toothfuse::max_threads();
+        let (ios_read, cbct_read) = if cap == 1 {
+            (read_ios_here(), read_cbct())
+        } else {
+            std::thread::scope(|s| {
+                let c = s.spawn(|| toothfuse::with_max_threads(cap, read_cbct));
+                let i = read_ios_here();
+                let c = c.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+                (i, c)
+            })
+        };
         let (ios, ios_note) = ios_read?;
         let t = cbct_read?;
         // How the labels were read, said once both inputs are read (errors stay one line).

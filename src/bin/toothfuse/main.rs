@@ -21,6 +21,10 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Most threads to use in all (0: as many as the CPUs allow, at most 4 per step; 1: one
+    /// thread). The outputs are the same bit for bit whatever N.
+    #[arg(long, global = true, value_name = "N", default_value_t = 0)]
+    threads: usize,
 }
 
 #[derive(Subcommand)]
@@ -61,14 +65,14 @@ fn main() -> ExitCode {
         }
     }
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result = toothfuse::with_max_threads(cli.threads, || match cli.command {
         Command::Demo(a) => demo::run(&a),
         Command::Info(a) => info::run(&a),
         Command::Register(a) => register::run(&a),
         Command::Fuse(a) => fuse::run(&a),
         Command::Eval(a) => eval::run(&a),
         Command::Render(a) => render_cmd::run(&a),
-    };
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
