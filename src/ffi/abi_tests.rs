@@ -313,3 +313,34 @@ fn labeled_jaw_is_split_into_teeth_with_their_source_vertices() {
     let st = unsafe { toothfuse_session_tooth_count(s.0, TOOTHFUSE_MODALITY_IOS, &mut n) };
     assert_eq!((st, n), (toothfuse_status::Ok, 2));
 }
+
+/// The thread cap: NULL refused; any value accepted and kept by the session; calls under a cap
+/// of one run on the calling thread and still succeed.
+#[test]
+fn thread_cap_is_set_per_session_and_null_is_refused() {
+    // SAFETY: NULL is allowed and refused.
+    let st = unsafe { toothfuse_session_set_max_threads(ptr::null_mut(), 1) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    let s = S::new();
+    for n in [0, 1, 4, u32::MAX, 1] {
+        // SAFETY: live session.
+        let st = unsafe { toothfuse_session_set_max_threads(s.0, n) };
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    }
+    // SAFETY: live session; 4 double vertices, 12 indices.
+    let st = unsafe {
+        toothfuse_session_add_tooth(
+            s.0,
+            TOOTHFUSE_MODALITY_CBCT,
+            36,
+            TET.as_ptr().cast::<c_void>(),
+            4,
+            24,
+            TOOTHFUSE_SCALAR_FLOAT64,
+            TET_IDX.as_ptr(),
+            12,
+        )
+    };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    assert_eq!(crate::par::max_threads(), 0, "the cap ends with the call");
+}
