@@ -226,21 +226,7 @@ fn fuses_a_phantom_closed_manifold_with_every_crown_vertex() {
     assert_eq!(found, fdis.iter().copied().collect());
     assert!(src.iter().all(|&x| x <= TOOTHFUSE_SOURCE_CBCT));
     // The report JSON is the `toothfuse fuse` contract.
-    let mut len = 0usize;
-    // SAFETY: live session; size query then copy.
-    let json = unsafe {
-        assert_eq!(
-            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
-            toothfuse_status::Ok
-        );
-        let mut buf = vec![0 as std::ffi::c_char; len + 1];
-        assert_eq!(
-            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
-            toothfuse_status::Ok
-        );
-        CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned()
-    };
-    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&report_json(&s)).unwrap();
     assert_eq!(v["frame"], "cbct");
     let teeth = v["teeth"].as_array().unwrap();
     assert_eq!(teeth.len(), fdis.len());
@@ -332,9 +318,16 @@ fn fuse_registered_reuses_the_registration_bit_for_bit() {
 
 /// The report JSON of the last fuse, its timings left out.
 fn report_without_timing(s: &Session) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_str(&report_json(s)).unwrap();
+    v["timing_ms"] = serde_json::Value::Null;
+    v
+}
+
+/// The report JSON of the last fuse (size query, then copy).
+fn report_json(s: &Session) -> String {
     let mut len = 0usize;
     // SAFETY: live session; size query then copy.
-    let json = unsafe {
+    unsafe {
         assert_eq!(
             toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
             toothfuse_status::Ok
@@ -345,10 +338,7 @@ fn report_without_timing(s: &Session) -> serde_json::Value {
             toothfuse_status::Ok
         );
         CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned()
-    };
-    let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
-    v["timing_ms"] = serde_json::Value::Null;
-    v
+    }
 }
 
 /// A session capped at one thread (everything on the caller's thread) fuses what an uncapped

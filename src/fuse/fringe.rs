@@ -10,7 +10,7 @@
 
 use crate::mesh::{
     EdgeTopology, RepairOptions, TakenAway, TriMesh, boundary_loops_of, is_repaired,
-    repair_open_surface, repair_taken, sorted_corners, taken_away,
+    repair_open_surface, repair_taken, sorted_corners, taken_away, without_faces,
 };
 pub use crate::mesh_check::crossing_pairs;
 use std::cmp::Reverse;
@@ -528,18 +528,11 @@ fn peel(
         }
     }
     for _ in 0..PEEL_RETRIES {
-        let kept: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .zip(remove.iter())
-            .filter(|&(_, &r)| !r)
-            .map(|(t, _)| *t)
-            .collect();
-        let removed = mesh.triangles.len() - kept.len();
+        let cut = without_faces(mesh, remove);
+        let removed = mesh.triangles.len() - cut.triangles.len();
         if removed == 0 {
             return None;
         }
-        let cut = TriMesh::new(mesh.positions.clone(), kept);
         #[cfg(test)]
         if repaired.is_some() {
             SPARED.with(|s| s.set(s.get() + 1));

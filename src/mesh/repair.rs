@@ -148,14 +148,7 @@ pub(crate) fn repair_taken(
     topo: &EdgeTopology,
     remove: &[bool],
 ) -> (TriMesh, Vec<u32>, RepairReport) {
-    let kept: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .zip(remove)
-        .filter(|(_, r)| !**r)
-        .map(|(t, _)| *t)
-        .collect();
-    let m = TriMesh::new(mesh.positions.clone(), kept);
+    let m = super::repaired::without_faces(mesh, remove);
     let topo = topo.without_faces(remove);
     let opts = RepairOptions {
         max_hole_fraction: 0.0,

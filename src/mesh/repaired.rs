@@ -41,6 +41,19 @@ pub fn is_repaired(mesh: &TriMesh, topo: &EdgeTopology) -> bool {
         && super::validate::non_manifold_vertices_of(mesh, topo).is_empty()
 }
 
+/// `mesh` less the faces marked in `remove`: its vertices as they are, the other faces in their
+/// order.
+pub fn without_faces(mesh: &TriMesh, remove: &[bool]) -> TriMesh {
+    let kept = mesh
+        .triangles
+        .iter()
+        .zip(remove)
+        .filter(|(_, r)| !**r)
+        .map(|(t, _)| *t)
+        .collect();
+    TriMesh::new(mesh.positions.clone(), kept)
+}
+
 /// What [`taken_away`] gives: the surface left, as [`repair_open_surface`] would return it, with
 /// its topology and boundary loops.
 ///
@@ -91,14 +104,7 @@ pub fn taken_away(mesh: &TriMesh, topo: &EdgeTopology, remove: &[bool]) -> Optio
             return None;
         }
     }
-    let kept: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .zip(remove)
-        .filter(|(_, r)| !**r)
-        .map(|(t, _)| *t)
-        .collect();
-    let mut left = TriMesh::new(mesh.positions.clone(), kept);
+    let mut left = without_faces(mesh, remove);
     let map = left.compact();
     let mut source = vec![0u32; left.positions.len()];
     for (old, &new) in map.iter().enumerate() {

@@ -83,17 +83,6 @@ fn masks(mesh: &TriMesh, count: usize) -> Vec<Vec<bool>> {
         .collect()
 }
 
-fn without(mesh: &TriMesh, remove: &[bool]) -> TriMesh {
-    let kept = mesh
-        .triangles
-        .iter()
-        .zip(remove)
-        .filter(|(_, r)| !**r)
-        .map(|(t, _)| *t)
-        .collect();
-    TriMesh::new(mesh.positions.clone(), kept)
-}
-
 fn repaired_without_filling(mesh: &TriMesh) -> (TriMesh, Vec<u32>, RepairReport) {
     repair_open_surface(
         mesh,
@@ -108,7 +97,7 @@ fn the_topology_less_some_faces_is_the_one_built_anew() {
     for mesh in [grid(12), cap()] {
         let topo = EdgeTopology::new(&mesh);
         for remove in masks(&mesh, 30) {
-            let cut = without(&mesh, &remove);
+            let cut = without_faces(&mesh, &remove);
             let fresh = EdgeTopology::new(&cut);
             let derived = topo.without_faces(&remove);
             assert_eq!(derived.half_edges, fresh.half_edges);
@@ -185,7 +174,7 @@ fn a_removal_taken_away_is_what_the_repair_returns() {
         let topo = EdgeTopology::new(&mesh);
         assert!(is_repaired(&mesh, &topo));
         for remove in masks(&mesh, 60) {
-            let cut = without(&mesh, &remove);
+            let cut = without_faces(&mesh, &remove);
             let expect = repaired_without_filling(&cut);
             assert_eq!(repair_taken(&mesh, &topo, &remove), expect);
             match taken_away(&mesh, &topo, &remove) {
