@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 use toothfuse::TriMesh;
 use toothfuse::arch::Jaw;
-use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, VoxelizeOptions, voxelize};
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant, VoxelizeOptions, voxelize};
 use toothfuse::pipeline::{self, PipelineOptions, PipelineResult};
 use toothfuse::volume::{SplitOptions, SurfaceOptions, VolumeScheme, split_teeth, surface_teeth};
 
@@ -69,10 +69,12 @@ fn teeth_bits(t: &BTreeMap<u8, TriMesh>) -> Vec<(u8, MeshBits)> {
     t.iter().map(|(&f, m)| (f, mesh_bits(m))).collect()
 }
 
+/// A rough export of a partial arch (a few teeth: the suite's time).
 fn rough_options() -> PhantomOptions {
     let mut opts = PhantomOptions {
         seed: 4,
         jaw: Jaw::Upper,
+        variant: Variant::PartialArch,
         ..Default::default()
     };
     opts.realism.ios.rough = IosExport::Rough.roughness();
@@ -123,7 +125,7 @@ fn clean_and_rough_jaws_fuse_the_same_on_one_thread() {
             let r = pipeline::fuse(&p.ios, &p.cbct, &PipelineOptions::default()).expect(what);
             fused(&r)
         });
-        assert!(a.4.len() >= 12, "{what}: {} teeth fused", a.4.len());
+        assert!(a.4.len() >= 3, "{what}: {} teeth fused", a.4.len());
         assert!(a == b, "{what}: the one-thread fuse differs");
     }
 }
