@@ -13,10 +13,11 @@ thread_local! {
 }
 
 /// Runs `f` with the library's parallel steps using at most `n` threads in all, the calling
-/// thread's included (it works on a step's items beside the threads it spawns) (`0`: no cap: as many as the CPUs the process may run on allow, at most 4
-/// per step). With `n = 1` everything runs on the calling thread and no thread is spawned. The
-/// results are the same bit for bit whatever `n`: each parallel step computes every item from
-/// the item alone and returns the results in the items' order.
+/// thread's included: it works on a step's items beside the threads it spawns (`0`: no cap: as
+/// many as the CPUs the process may run on allow, at most 4 per step). With `n = 1` everything
+/// runs on the calling thread and no thread is spawned. The results are the same bit for bit
+/// whatever `n`: each parallel step computes every item from the item alone and returns the
+/// results in the items' order.
 ///
 /// The cap holds on the calling thread for the duration of `f` (other threads of the host are
 /// not affected) and is restored afterwards, also when `f` panics.
