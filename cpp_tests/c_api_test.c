@@ -56,6 +56,11 @@ int main(void) {
   CHECK_STATUS(toothfuse_session_new(&session), TOOTHFUSE_STATUS_OK);
   if (session == NULL) return 1;
 
+  /* Thread cap: per session, any value; this test's calls then run on this thread alone. */
+  CHECK(toothfuse_session_set_max_threads(NULL, 1) == TOOTHFUSE_STATUS_NULL_PARAMETER);
+  CHECK_STATUS(toothfuse_session_set_max_threads(session, 0), TOOTHFUSE_STATUS_OK);
+  CHECK_STATUS(toothfuse_session_set_max_threads(session, 1), TOOTHFUSE_STATUS_OK);
+
   /* Add a CBCT tooth from float vertices with padding. */
   CHECK_STATUS(toothfuse_session_add_tooth(session, TOOTHFUSE_MODALITY_CBCT, 21, tet_f, 4,
                                            sizeof tet_f[0], TOOTHFUSE_SCALAR_FLOAT32, tet_t, 12),
