@@ -14,9 +14,8 @@ mod validate;
 mod vertex_sort;
 
 pub use buffers::{Scalar, VertexBuffer};
-pub(crate) use repair::repair_taken;
 pub use repair::{RepairOptions, RepairReport, repair_open_surface};
-pub(crate) use repaired::{TakenAway, is_repaired, taken_away, without_faces};
+pub(crate) use repaired::{TakenAway, is_repaired, repair_taken, taken_away, without_faces};
 pub use split::{LabelDomain, SubMesh, split_by_face_labels, split_by_vertex_labels};
 pub use topology::{EdgeTopology, boundary_loops, boundary_loops_of, connected_components};
 pub use validate::{ValidateOptions, ValidationReport, non_manifold_vertices};

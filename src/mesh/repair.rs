@@ -137,19 +137,12 @@ fn repair_once(
     repair_rest(m, topo, opts, holes, rep)
 }
 
-/// [`repair_open_surface`] without hole filling of `mesh` less the faces marked in `remove`,
-/// where `mesh` is a surface [`super::is_repaired`] says yes to and `topo` its topology: the
-/// same mesh, map and report, with less work. Such a surface has no face with a bad corner or
-/// no area, none twice and no edge of three faces, and taking faces away cannot make one, so
-/// the first two steps would keep every face (and count nothing); and the faces left have the
-/// surface's half-edges less the removed faces', in the same order.
-pub(crate) fn repair_taken(
-    mesh: &TriMesh,
-    topo: &EdgeTopology,
-    remove: &[bool],
+/// Steps 3 to 7 of [`repair_once`] without hole filling, on `m` whose first two steps have
+/// nothing to do (`topo` its topology): the repaired mesh, its vertices' sources and the report.
+pub(super) fn repair_rest_unfilled(
+    m: TriMesh,
+    topo: EdgeTopology,
 ) -> (TriMesh, Vec<u32>, RepairReport) {
-    let m = super::repaired::without_faces(mesh, remove);
-    let topo = topo.without_faces(remove);
     let opts = RepairOptions {
         max_hole_fraction: 0.0,
     };

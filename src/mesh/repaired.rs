@@ -122,5 +122,21 @@ pub fn taken_away(mesh: &TriMesh, topo: &EdgeTopology, remove: &[bool]) -> Optio
     })
 }
 
+/// [`repair_open_surface`] without hole filling of `mesh` less the faces marked in `remove`,
+/// where `mesh` is a surface [`is_repaired`] says yes to and `topo` its topology: the
+/// same mesh, map and report, with less work. Such a surface has no face with a bad corner or
+/// no area, none twice and no edge of three faces, and taking faces away cannot make one, so
+/// the first two steps would keep every face (and count nothing); and the faces left have the
+/// surface's half-edges less the removed faces', in the same order.
+///
+/// [`repair_open_surface`]: super::repair_open_surface
+pub(crate) fn repair_taken(
+    mesh: &TriMesh,
+    topo: &EdgeTopology,
+    remove: &[bool],
+) -> (TriMesh, Vec<u32>, super::RepairReport) {
+    super::repair::repair_rest_unfilled(without_faces(mesh, remove), topo.without_faces(remove))
+}
+
 #[cfg(test)]
 mod tests;

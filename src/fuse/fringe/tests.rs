@@ -1,7 +1,7 @@
 //! Unit tests of the `fringe` module.
 
 use super::*;
-use crate::mesh::boundary_loops;
+use crate::mesh::{RepairOptions, boundary_loops, repair_open_surface};
 use crate::mesh_check::triangles_intersect;
 use glam::DVec3;
 
