@@ -225,14 +225,21 @@ fn repair_rest(
         Vec::new()
     };
     // 7. Drop unused vertices, keeping the source map in step.
+    let new_source = compact_with_source(&mut m, |old| source[old]);
+    (m, new_source, rep, crossed)
+}
+
+/// Drops `m`'s unused vertices ([`TriMesh::compact`]); returns per vertex left the source of
+/// the vertex it was (`source_of` its index before).
+pub(super) fn compact_with_source(m: &mut TriMesh, source_of: impl Fn(usize) -> u32) -> Vec<u32> {
     let map = m.compact();
     let mut new_source = vec![0u32; m.positions.len()];
     for (old, &new) in map.iter().enumerate() {
         if new != u32::MAX {
-            new_source[new as usize] = source[old];
+            new_source[new as usize] = source_of(old);
         }
     }
-    (m, new_source, rep, crossed)
+    new_source
 }
 
 /// Step 1 of [`repair_open_surface`]: the faces without an out-of-range index, a repeated
@@ -411,7 +418,7 @@ fn caps_crossing_each_other(m: &TriMesh, caps: &[std::ops::Range<usize>]) -> usi
 /// and no two faces on the same three vertices (steps 1 and 2 of [`repair_open_surface`]), two
 /// faces sharing an edge then run it in opposite directions, and [`orient_consistently`] flips
 /// and drops nothing.
-fn orientation_consistent(topo: &EdgeTopology) -> bool {
+pub(super) fn orientation_consistent(topo: &EdgeTopology) -> bool {
     topo.half_edges
         .windows(2)
         .all(|w| (w[0].0, w[0].1) != (w[1].0, w[1].1))

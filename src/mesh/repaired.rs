@@ -33,10 +33,7 @@ pub fn is_repaired(mesh: &TriMesh, topo: &EdgeTopology) -> bool {
                 && t[0] != t[2]
                 && mesh.face_cross(f) != DVec3::ZERO
         })
-        && topo
-            .half_edges
-            .windows(2)
-            .all(|w| (w[0].0, w[0].1) != (w[1].0, w[1].1))
+        && super::repair::orientation_consistent(topo)
         && connected_components_of(topo, nf).1 == 1
         && super::validate::non_manifold_vertices_of(mesh, topo).is_empty()
 }
@@ -105,13 +102,7 @@ pub fn taken_away(mesh: &TriMesh, topo: &EdgeTopology, remove: &[bool]) -> Optio
         }
     }
     let mut left = without_faces(mesh, remove);
-    let map = left.compact();
-    let mut source = vec![0u32; left.positions.len()];
-    for (old, &new) in map.iter().enumerate() {
-        if new != u32::MAX {
-            source[new as usize] = old as u32;
-        }
-    }
+    let source = super::repair::compact_with_source(&mut left, |old| old as u32);
     let topo = EdgeTopology::new(&left);
     let loops = boundary_loops_of(&topo);
     (loops.len() == 1).then_some(TakenAway {

@@ -15,22 +15,7 @@ pub struct EdgeTopology {
 impl EdgeTopology {
     /// Builds the half-edge list of `mesh` (counting sorts, no comparisons).
     pub fn new(mesh: &TriMesh) -> Self {
-        let n = mesh
-            .triangles
-            .iter()
-            .flat_map(|t| t.iter())
-            .map(|&v| v as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let mut offsets = vec![0u32; n + 1];
-        for t in &mesh.triangles {
-            for &v in t {
-                offsets[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            offsets[v + 1] += offsets[v];
-        }
+        let offsets = origin_offsets(mesh.triangles.iter().flatten().copied());
         // Two stable counting sorts, by target then by origin, leave the half-edges sorted by
         // (from, to, face). A vertex is the target of as many half-edges as it is the origin of
         // (one per face corner), so both sorts share the offsets.
@@ -154,19 +139,8 @@ impl EdgeTopology {
             .filter(|e| !remove[e.2 as usize])
             .map(|&(a, b, f)| (a, b, new_face[f as usize]))
             .collect();
-        // As `new`: one entry per vertex up to the highest one still used.
-        let n = half_edges
-            .iter()
-            .map(|e| e.0.max(e.1) as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let mut offsets = vec![0u32; n + 1];
-        for e in &half_edges {
-            offsets[e.0 as usize + 1] += 1;
-        }
-        for v in 0..n {
-            offsets[v + 1] += offsets[v];
-        }
+        // Every corner of a face is the origin of one of its half-edges.
+        let offsets = origin_offsets(half_edges.iter().map(|e| e.0));
         Self {
             half_edges,
             offsets,
@@ -194,6 +168,20 @@ impl EdgeTopology {
             })
             .collect()
     }
+}
+
+/// Where each vertex's half-edges start in the sorted list, from the origin of every half-edge
+/// (one entry per vertex up to the highest origin, and one more: the count).
+fn origin_offsets(origins: impl Iterator<Item = u32> + Clone) -> Vec<u32> {
+    let n = origins.clone().map(|v| v as usize + 1).max().unwrap_or(0);
+    let mut offsets = vec![0u32; n + 1];
+    for v in origins {
+        offsets[v as usize + 1] += 1;
+    }
+    for v in 0..n {
+        offsets[v + 1] += offsets[v];
+    }
+    offsets
 }
 
 /// `items` in a stable counting sort by `vertex(item)`, whose runs start at `offsets` (one

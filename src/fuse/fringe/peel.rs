@@ -86,8 +86,7 @@ pub(super) fn peel(
         }
     }
     for _ in 0..PEEL_RETRIES {
-        let cut = without_faces(mesh, remove);
-        let removed = mesh.triangles.len() - cut.triangles.len();
+        let removed = remove.iter().filter(|&&r| r).count();
         if removed == 0 {
             return None;
         }
@@ -108,7 +107,7 @@ pub(super) fn peel(
                 let (rep, rep_src, done) = match repaired {
                     Some(topo) => repair_taken(mesh, topo, remove),
                     None => repair_open_surface(
-                        &cut,
+                        &without_faces(mesh, remove),
                         &RepairOptions {
                             max_hole_fraction: 0.0,
                         },
@@ -134,7 +133,12 @@ pub(super) fn peel(
                 .map(|t| sorted_corners(t.map(|v| rep_src[v as usize])))
                 .collect();
             left.sort_unstable();
-            for t in &cut.triangles {
+            let kept = mesh
+                .triangles
+                .iter()
+                .zip(remove.iter())
+                .filter(|(_, r)| !**r);
+            for (t, _) in kept {
                 if left.binary_search(&sorted_corners(*t)).is_err() {
                     for &v in t {
                         culprit[v as usize] = true;
