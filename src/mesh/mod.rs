@@ -2,6 +2,7 @@
 //! (edges, boundary loops, components), measures (normals, volume) and label splitting.
 
 mod buffers;
+mod fan_pass;
 mod hole_cap;
 mod measure;
 #[cfg(test)]

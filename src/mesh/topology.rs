@@ -45,6 +45,13 @@ impl EdgeTopology {
         }
     }
 
+    /// One more than the largest vertex index any face uses (0 without faces): the vertices
+    /// with a block of half-edges, which may exceed the mesh's vertices when a face indexes
+    /// past them.
+    pub(super) fn vertex_span(&self) -> u32 {
+        self.offsets.len().saturating_sub(1) as u32
+    }
+
     /// Faces holding the directed edge `a → b`.
     pub fn faces_of_directed(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
         let block: &[(u32, u32, u32)] = match (
@@ -268,8 +275,10 @@ pub fn connected_components_of(topo: &EdgeTopology, nf: usize) -> (Vec<u32>, usi
 }
 
 /// [`EdgeTopology::edge_counts`] and the component count of [`connected_components_of`] in one pass over the half-edges:
-/// `(boundary edges, non-manifold edges, components)`.
-pub fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usize, usize) {
+/// `(boundary edges, non-manifold edges, components)`. The reference the per-vertex pass
+/// ([`super::fan_pass::fan_counts`], which the library uses) is tested against.
+#[cfg(test)]
+pub(super) fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usize, usize) {
     let mut parent: Vec<u32> = (0..nf as u32).collect();
     let (mut boundary, mut non_manifold) = (0, 0);
     let h = &topo.half_edges;
@@ -304,7 +313,7 @@ pub fn edge_and_component_counts(topo: &EdgeTopology, nf: usize) -> (usize, usiz
 }
 
 /// Joins the sets of faces `f` and `g` (the lower root becomes the root).
-fn union_roots(parent: &mut [u32], f: u32, g: u32) {
+pub(super) fn union_roots(parent: &mut [u32], f: u32, g: u32) {
     let (ra, rb) = (find(parent, f), find(parent, g));
     if ra != rb {
         parent[ra.max(rb) as usize] = ra.min(rb);
@@ -351,7 +360,7 @@ fn face_union(topo: &EdgeTopology, nf: usize) -> Vec<u32> {
 /// Counts the undirected edge `a`–`b` with `same` half-edges a→b and `rev` half-edges b→a as a
 /// boundary or non-manifold edge. Counted once: from its smaller end, or from this end when the
 /// other direction is absent (as [`EdgeTopology::undirected_edges`] lists it).
-fn count_edge(
+pub(super) fn count_edge(
     a: u32,
     b: u32,
     same: usize,

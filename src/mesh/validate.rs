@@ -60,11 +60,11 @@ impl TriMesh {
     pub(crate) fn validate_into_topology(&self, opts: &ValidateOptions) -> Result<EdgeTopology> {
         self.check_elements(opts)?;
         let topo = EdgeTopology::new(self);
-        let (boundary_edges, non_manifold_edges) = topo.edge_counts();
+        let c = super::fan_pass::fan_counts(self, &topo, false);
         let counts = ValidationReport {
-            boundary_edges,
-            non_manifold_edges,
-            non_manifold_vertices: non_manifold_vertices_of(self, &topo).len(),
+            boundary_edges: c.boundary_edges,
+            non_manifold_edges: c.non_manifold_edges,
+            non_manifold_vertices: c.non_manifold_vertices.len(),
             ..Default::default()
         };
         self.check_topology(opts, &topo, &counts)?;
@@ -155,19 +155,10 @@ impl TriMesh {
 
     /// [`TriMesh::topology_report`] from an already built topology of this mesh.
     pub fn topology_report_of(&self, topo: &EdgeTopology) -> ValidationReport {
-        let (boundary_edges, non_manifold_edges, components) =
-            super::topology::edge_and_component_counts(topo, self.triangles.len());
-        let mut used = vec![false; self.positions.len()];
-        for t in &self.triangles {
-            for &v in t {
-                if let Some(u) = used.get_mut(v as usize) {
-                    *u = true;
-                }
-            }
-        }
+        let c = super::fan_pass::fan_counts(self, topo, true);
         // Without non-manifold edges, a boundary half-edge (no reverse partner) is exactly a
         // boundary edge: no boundary edge, no loop.
-        let loops = if non_manifold_edges == 0 && boundary_edges > 0 {
+        let loops = if c.non_manifold_edges == 0 && c.boundary_edges > 0 {
             super::topology::boundary_loops_of(topo).len()
         } else {
             0
@@ -175,11 +166,11 @@ impl TriMesh {
         ValidationReport {
             vertices: self.positions.len(),
             faces: self.triangles.len(),
-            boundary_edges,
-            non_manifold_edges,
-            non_manifold_vertices: non_manifold_vertices_of(self, topo).len(),
-            unused_vertices: used.iter().filter(|u| !**u).count(),
-            components,
+            boundary_edges: c.boundary_edges,
+            non_manifold_edges: c.non_manifold_edges,
+            non_manifold_vertices: c.non_manifold_vertices.len(),
+            unused_vertices: c.unused_vertices,
+            components: c.components.unwrap_or_default(),
             boundary_loops: loops,
         }
     }
@@ -257,7 +248,7 @@ impl FanScratch {
 /// whose `next` is its `prev` (they share that edge) visits all of them in one cycle. `block` is
 /// sorted by `next`; any other shape (a boundary fan, a repeated `next`) answers false and is
 /// decided by the general union.
-fn one_cycle(block: &[(u32, u32, u32)], prev: &[u32]) -> bool {
+pub(super) fn one_cycle(block: &[(u32, u32, u32)], prev: &[u32]) -> bool {
     let m = block.len();
     if block.windows(2).any(|w| w[0].1 == w[1].1) {
         return false;
