@@ -11,8 +11,10 @@ Usage: python3 scripts/run_test_binaries.py [--jobs N] -- CARGO_TEST_ARGS...
   e.g. python3 scripts/run_test_binaries.py -- --release --lib --bins --tests
 Builds with `cargo test --no-run CARGO_TEST_ARGS --message-format=json`, then runs every
 executable from the package root. The order: the executables that took longest in the previous
-run (durations kept in target/test-durations.json), unknown ones first. Exit status 1 when any
-executable failed (every executable still runs).
+run (durations kept in target/test-durations.json; on a fresh clone, where there is no previous
+run, those of scripts/test-durations.json, committed, so that a fresh CI machine also starts the
+longest first), unknown ones first. Exit status 1 when any executable failed (every executable
+still runs).
 """
 
 import argparse
@@ -69,11 +71,13 @@ def main():
     cargo_args = [a for a in args.cargo_args if a != "--"]
     exes = executables(cargo_args)
     durations_file = os.path.join(target_dir(), "test-durations.json")
-    try:
-        with open(durations_file) as f:
-            previous = json.load(f)
-    except (OSError, ValueError):
-        previous = {}
+    previous = {}
+    for path in (os.path.join(ROOT, "scripts", "test-durations.json"), durations_file):
+        try:
+            with open(path) as f:
+                previous.update(json.load(f))
+        except (OSError, ValueError):
+            pass
     # Longest first (unknown ones count as long), so the long ones do not finish last alone.
     exes.sort(key=lambda e: -previous.get(e[0], float("inf")))
     print(f"running {len(exes)} test executables, {args.jobs} at a time", flush=True)
