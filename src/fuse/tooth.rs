@@ -256,7 +256,13 @@ fn cut_inner(
     if !rep.is_clean() {
         warnings.push(format!("IOS crown repaired: {rep:?}"));
     }
-    let (mut crown, rep_src, trimmed, dist_in) = fold_trim(
+    let FoldTrimmed {
+        mut crown,
+        rep_src,
+        trimmed,
+        dist_in,
+        loops,
+    } = fold_trim(
         crown,
         rep_src,
         ios_crown.positions.len(),
@@ -268,7 +274,7 @@ fn cut_inner(
         root_in.flip();
         warnings.push("CBCT tooth was inward-oriented; flipped".into());
     }
-    let loops = boundary_loops(&crown);
+    let loops = loops.unwrap_or_else(|| boundary_loops(&crown));
     if loops.len() != 1 {
         return Err(Error::InvalidArgument(format!(
             "IOS crown has {} boundary loops after repair; exactly one (the gingival margin) is needed",
@@ -335,19 +341,33 @@ fn cut_inner(
     })
 }
 
+/// What [`fold_trim`] returns.
+struct FoldTrimmed {
+    /// The crown, trimmed or as it came.
+    crown: TriMesh,
+    /// Per vertex of `crown`, its IOS input index.
+    rep_src: Vec<u32>,
+    /// What the trim took.
+    trimmed: super::fringe::FringeTrim,
+    /// Per input vertex, its distance from the margin along the crown (empty when off).
+    dist_in: Vec<f64>,
+    /// `crown`'s boundary loops where they were found and nothing was trimmed after.
+    loops: Option<Vec<Vec<u32>>>,
+}
+
 /// The fringe trim before the first band build (default preset, `opts.fringe_reach_mm` > 0):
 /// crown faces within the reach of the margin that cross other crown faces, peeled
-/// ([`super::fringe::trim_fringe`]). Returns the crown, its vertices' input indices, the trim
-/// and per input vertex its distance from the margin along the crown (empty when off).
+/// ([`super::fringe::trim_fringe`]).
 fn fold_trim(
     mut crown: TriMesh,
     mut rep_src: Vec<u32>,
     input_vertices: usize,
     opts: &FuseOptions,
     warnings: &mut Vec<String>,
-) -> (TriMesh, Vec<u32>, super::fringe::FringeTrim, Vec<f64>) {
+) -> FoldTrimmed {
     let mut trimmed = super::fringe::FringeTrim::default();
     let mut dist_in = Vec::new();
+    let mut known_loops = None;
     if opts.fringe_reach_mm > 0.0 {
         let loops = boundary_loops(&crown);
         if loops.len() == 1 {
@@ -377,10 +397,24 @@ fn fold_trim(
                     "{} IOS crown vertices ({} faces) trimmed from the margin fringe (folded over other crown faces; at most {:.2} mm from the margin)",
                     t.vertices, t.faces, t.max_reach_mm
                 ));
+                return FoldTrimmed {
+                    crown,
+                    rep_src,
+                    trimmed,
+                    dist_in,
+                    loops: None,
+                };
             }
         }
+        known_loops = Some(loops);
     }
-    (crown, rep_src, trimmed, dist_in)
+    FoldTrimmed {
+        crown,
+        rep_src,
+        trimmed,
+        dist_in,
+        loops: known_loops,
+    }
 }
 
 /// Crown removal along the margin `margin_pts` about `frame`'s axis; where that cut does not go
