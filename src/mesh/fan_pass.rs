@@ -42,6 +42,7 @@ pub(crate) fn fan_counts(mesh: &TriMesh, topo: &EdgeTopology, components: bool) 
     };
     let mut scratch = FanScratch::default();
     let mut prev: Vec<u32> = Vec::new();
+    let mut by_prev: Vec<(u32, u32)> = Vec::new();
     let nv = mesh.positions.len() as u32;
     // Vertices past the mesh's (a face indexing beyond them) count in the edges and
     // components, neither unused nor non-manifold: as the separate passes have it.
@@ -74,6 +75,11 @@ pub(crate) fn fan_counts(mesh: &TriMesh, topo: &EdgeTopology, components: bool) 
         if v < nv && !scratch.one_fan(mesh, v, block) {
             out.non_manifold_vertices.push(v);
         }
+        // The corners by third corner: the faces of `b → v` for each `b` found by binary
+        // search, so that a vertex with many corners costs O(m log m), not O(m²).
+        by_prev.clear();
+        by_prev.extend(prev.iter().zip(block).map(|(&p, e)| (p, e.2)));
+        by_prev.sort_unstable();
         let mut i = 0;
         while i < block.len() {
             let b = block[i].1;
@@ -85,14 +91,13 @@ pub(crate) fn fan_counts(mesh: &TriMesh, topo: &EdgeTopology, components: bool) 
                 }
                 j += 1;
             }
-            let rev = prev.iter().filter(|&&p| p == b).count();
+            let lo = by_prev.partition_point(|e| e.0 < b);
+            let hi = lo + by_prev[lo..].partition_point(|e| e.0 == b);
+            let rev = hi - lo;
             if components && v < b {
-                for (&p, &(_, _, g)) in prev.iter().zip(block) {
-                    if p == b {
-                        for &(_, _, f) in &block[i..j] {
-                            union_roots(&mut parent, f, g);
-                        }
-                    }
+                // The run's faces are joined already: one of them with each face of `b → v`.
+                for &(_, g) in &by_prev[lo..hi] {
+                    union_roots(&mut parent, block[i].2, g);
                 }
             }
             count_edge(
@@ -185,6 +190,21 @@ mod tests {
         );
         m.positions.push(glam::DVec3::splat(9.0));
         check(&m);
+        // Cones of 300 faces around their apex, closed and open: vertices of many corners.
+        let k = 300u32;
+        let mut positions = vec![glam::DVec3::Z];
+        positions.extend((0..k).map(|i| {
+            let a = i as f64 * std::f64::consts::TAU / k as f64;
+            glam::DVec3::new(a.cos(), a.sin(), 0.0)
+        }));
+        positions.push(glam::DVec3::ZERO);
+        let side: Vec<[u32; 3]> = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
+        let base = (0..k).map(|i| [k + 1, 1 + (i + 1) % k, 1 + i]);
+        check(&TriMesh::new(positions.clone(), side.clone()));
+        check(&TriMesh::new(
+            positions,
+            side.into_iter().chain(base).collect(),
+        ));
     }
 
     /// Random faces over few vertices: repeated corners, repeated, reversed and
