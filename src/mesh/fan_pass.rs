@@ -1,7 +1,8 @@
 //! One pass over the vertices' corner fans that gives a mesh's edge counts, its non-manifold
-//! vertices and (when asked) its edge-connected components: what
-//! [`super::topology::edge_and_component_counts`] and [`super::validate::non_manifold_vertices_of`]
-//! give, from each vertex's own block of half-edges alone.
+//! vertices and (when asked) its edge-connected components: what a pass over the half-edges
+//! (looking up each reverse edge in the other end's block; kept as the tests' reference) and
+//! [`super::validate::non_manifold_vertices_of`] give, from each vertex's own block of
+//! half-edges alone.
 //!
 //! A face corner at `v` is the half-edge `v → next` with the face's third corner `prev`, and
 //! `prev → v` is a half-edge of the same face. Over `v`'s corners, the `prev`s are therefore the
