@@ -15,7 +15,7 @@
 
 use super::TriMesh;
 use super::topology::{EdgeTopology, count_edge, union_roots};
-use super::validate::{FanScratch, one_cycle};
+use super::validate::{FanScratch, one_cycle, third_corners};
 
 /// What [`fan_counts`] measures.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -55,11 +55,7 @@ pub(crate) fn fan_counts(mesh: &TriMesh, topo: &EdgeTopology, components: bool) 
             }
             continue;
         }
-        prev.clear();
-        prev.extend(block.iter().map(|&(_, b, f)| {
-            let t = mesh.triangles[f as usize];
-            t[0] ^ t[1] ^ t[2] ^ v ^ b
-        }));
+        third_corners(mesh, v, block, &mut prev);
         if one_cycle(block, &prev) {
             // Every edge at `v` once each way: nothing to count; the faces across each edge
             // joined from its smaller end.
@@ -73,7 +69,8 @@ pub(crate) fn fan_counts(mesh: &TriMesh, topo: &EdgeTopology, components: bool) 
             }
             continue;
         }
-        if v < nv && !scratch.one_fan(mesh, v, block) {
+        // Not one cycle: the general test of one fan decides.
+        if v < nv && !scratch.fans_joined(block, &prev) {
             out.non_manifold_vertices.push(v);
         }
         // The corners by third corner: the faces of `b → v` for each `b` found by binary

@@ -206,18 +206,17 @@ impl FanScratch {
     /// has `prev` as its third corner; two corners are in one fan when they share a neighbour
     /// vertex (an edge through `v`), transitively.
     pub(crate) fn one_fan(&mut self, mesh: &TriMesh, v: u32, block: &[(u32, u32, u32)]) -> bool {
-        let (prev, parent, nb) = (&mut self.prev, &mut self.parent, &mut self.nb);
-        prev.clear();
-        // The half-edge is `t[k] → t[k + 1]` for some k, so the third corner `t[k + 2]` is the
-        // exclusive or of all three with both ends (whatever corners repeat).
-        prev.extend(block.iter().map(|&(_, b, f)| {
-            let t = mesh.triangles[f as usize];
-            t[0] ^ t[1] ^ t[2] ^ v ^ b
-        }));
-        if one_cycle(block, prev) {
-            return true;
-        }
-        // General case: union the corners that share a neighbour vertex.
+        let mut prev = std::mem::take(&mut self.prev);
+        third_corners(mesh, v, block, &mut prev);
+        let one = one_cycle(block, &prev) || self.fans_joined(block, &prev);
+        self.prev = prev;
+        one
+    }
+
+    /// The general case of [`FanScratch::one_fan`], given the corners' third corners `prev`:
+    /// whether the corners that share a neighbour vertex, joined, make one set.
+    pub(crate) fn fans_joined(&mut self, block: &[(u32, u32, u32)], prev: &[u32]) -> bool {
+        let (parent, nb) = (&mut self.parent, &mut self.nb);
         let m = block.len();
         parent.clear();
         parent.extend(0..m);
@@ -242,6 +241,17 @@ impl FanScratch {
         }
         (0..m).filter(|&x| find(parent, x) == x).count() == 1
     }
+}
+
+/// The third corner of each corner of `v` in `block` (its half-edges `v → b` of face `f`), into
+/// `out`: the half-edge is `t[k] → t[k + 1]` for some k, so the third corner `t[k + 2]` is the
+/// exclusive or of all three with both ends (whatever corners repeat).
+pub(super) fn third_corners(mesh: &TriMesh, v: u32, block: &[(u32, u32, u32)], out: &mut Vec<u32>) {
+    out.clear();
+    out.extend(block.iter().map(|&(_, b, f)| {
+        let t = mesh.triangles[f as usize];
+        t[0] ^ t[1] ^ t[2] ^ v ^ b
+    }));
 }
 
 /// A sufficient test that a vertex's corners form one fan: following each corner to the corner
