@@ -40,7 +40,7 @@ pub fn max_threads() -> usize {
 /// The threads a step over `items` items takes: the CPUs allowed (at most [`MOST_THREADS`]),
 /// no more than the cap on this thread, nor than the items.
 fn threads_for(items: usize) -> usize {
-    let cap = CAP.with(Cell::get);
+    let cap = max_threads();
     let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads = cpus.clamp(1, MOST_THREADS).min(items.max(1));
     if cap > 0 {
@@ -84,10 +84,7 @@ fn map_in_order<T: Sync, R: Send>(
     }
     // Under a cap, the workers already use the threads it allows: a parallel step inside a
     // worker runs on that worker alone.
-    let worker_cap = match CAP.with(Cell::get) {
-        0 => 0,
-        _ => 1,
-    };
+    let worker_cap = max_threads().min(1);
     let counter = std::sync::atomic::AtomicUsize::new(0);
     // Each worker takes the next item until none is left; the calling thread is one of them.
     let take = || {
@@ -102,12 +99,7 @@ fn map_in_order<T: Sync, R: Send>(
     std::thread::scope(|s| {
         let take = &take;
         let handles: Vec<_> = (1..threads)
-            .map(|_| {
-                s.spawn(move || {
-                    CAP.with(|c| c.set(worker_cap));
-                    take()
-                })
-            })
+            .map(|_| s.spawn(move || with_max_threads(worker_cap, take)))
             .collect();
         let mut all = with_max_threads(worker_cap, take);
         for h in handles {
