@@ -144,6 +144,11 @@ enum toothfuse_status
    * the likely cause. Set `accept_questionable` in the options to register anyway.
    */
   TOOTHFUSE_STATUS_REGISTRATION_REJECTED = 15,
+  /**
+   * The session's progress callback (`toothfuse_session_set_progress`) asked the call to
+   * stop; the session keeps what it held before the call.
+   */
+  TOOTHFUSE_STATUS_CANCELLED = 16,
 };
 #ifndef __cplusplus
 typedef uint32_t toothfuse_status;
@@ -447,6 +452,30 @@ typedef struct toothfuse_mesh_info {
 } toothfuse_mesh_info;
 
 /**
+ * A stage of a long call, as the progress callback is told it: one of the
+ * `TOOTHFUSE_STAGE_*` values.
+ */
+typedef uint32_t toothfuse_stage;
+
+/**
+ * The progress callback: `done` of `total` units of `stage` (a `TOOTHFUSE_STAGE_*` value) are
+ * finished. Return 0 to go on, any other value to cancel the call, which then returns
+ * TOOTHFUSE_STATUS_CANCELLED and leaves the session as it was before the call.
+ *
+ * It is called on the thread that called the library function, never on one of the library's
+ * worker threads and never twice at once: at each stage's start (`done` 0) and end (`done` =
+ * `total`), when a unit ends on the calling thread, and between the band builds of the tooth
+ * that thread stitches (a report may repeat the last one), so a cancel is answered within one
+ * tooth's band build (tens of milliseconds) on any input. Within a stage `done` never decreases.
+ * It must not call `toothfuse_*` functions on the same session and must not throw or unwind
+ * (a C++ exception out of it is undefined behaviour).
+ */
+typedef int32_t (*toothfuse_progress_fn)(void *user_data,
+                                         toothfuse_stage stage,
+                                         size_t done,
+                                         size_t total);
+
+/**
  * Which per-tooth transform: one of the `TOOTHFUSE_TRANSFORM_*` values.
  */
 typedef uint32_t toothfuse_transform;
@@ -529,6 +558,22 @@ typedef uint32_t toothfuse_volume_scheme;
  * 64-bit IEEE `double`.
  */
 #define TOOTHFUSE_SCALAR_FLOAT64 1
+
+/**
+ * Registration (`toothfuse_session_register`, and the first part of `toothfuse_session_fuse`):
+ * its 5 steps (per-tooth preparation, the gate, the coarse stage, the fine stage, the report).
+ */
+#define TOOTHFUSE_STAGE_REGISTER 1
+
+/**
+ * Crown removal: the teeth cut.
+ */
+#define TOOTHFUSE_STAGE_CUT 2
+
+/**
+ * Stitching: the teeth stitched.
+ */
+#define TOOTHFUSE_STAGE_STITCH 3
 
 /**
  * The paper's method, faithfully (CA, CR, FR over tooth triples; its cut and stitch).
@@ -974,6 +1019,23 @@ toothfuse_status toothfuse_session_mesh_info(const struct toothfuse_session *ses
                                              toothfuse_modality modality,
                                              int32_t fdi,
                                              struct toothfuse_mesh_info *info_out);
+
+/**
+ * Sets the progress callback of this session's long calls (`_register`, `_fuse`,
+ * `_fuse_registered`, `_cut`, `_stitch`), with `user_data` passed back to it unchanged; a NULL
+ * `callback` removes it. See `toothfuse_progress_fn` for when it is called and how a cancel
+ * works. The results are the same bit for bit with or without a callback. The session does not
+ * own `user_data`: it must stay valid while the callback is set. Other sessions are not
+ * affected.
+ *
+ * # Safety
+ * `session` must be NULL or a live session; `callback` NULL or a function with the signature
+ * of `toothfuse_progress_fn` that is safe to call with `user_data` on the threads that call
+ * this session's functions.
+ */
+toothfuse_status toothfuse_session_set_progress(struct toothfuse_session *session,
+                                                toothfuse_progress_fn callback,
+                                                void *user_data);
 
 /**
  * Writes the default options (preset DEFAULT, frame CBCT, `struct_size` set) to `*options_out`.

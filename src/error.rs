@@ -33,6 +33,8 @@ pub enum ErrorKind {
     Mirrored,
     /// The registration gate found that the IOS and the CBCT do not belong together.
     RegistrationRejected,
+    /// The caller's progress callback asked the call to stop.
+    Cancelled,
 }
 
 /// Everything that can go wrong in toothfuse. Messages say what is at fault and how to fix it.
@@ -100,6 +102,9 @@ pub enum Error {
     /// The IOS and the CBCT do not belong together (another patient, the other jaw, shifted
     /// tooth numbers); the message names the likely cause.
     RegistrationRejected(String),
+    /// The caller's progress callback ([`crate::progress::with_progress`]) asked the call to
+    /// stop; the message names the stage.
+    Cancelled(String),
     /// An error that concerns one tooth, by FDI number.
     Tooth {
         /// FDI number of the tooth.
@@ -128,6 +133,7 @@ impl Error {
             Error::WrongState(_) => ErrorKind::WrongState,
             Error::Mirrored(_) => ErrorKind::Mirrored,
             Error::RegistrationRejected(_) => ErrorKind::RegistrationRejected,
+            Error::Cancelled(_) => ErrorKind::Cancelled,
             Error::Tooth { inner, .. } => inner.kind(),
         }
     }
@@ -193,6 +199,7 @@ impl fmt::Display for Error {
             Error::WrongState(m) => write!(f, "wrong state: {m}"),
             Error::Mirrored(m) => write!(f, "mirrored: {m}"),
             Error::RegistrationRejected(m) => write!(f, "registration rejected: {m}"),
+            Error::Cancelled(m) => write!(f, "cancelled: {m}"),
             Error::Tooth { fdi, inner } => write!(f, "tooth {fdi}: {inner}"),
         }
     }

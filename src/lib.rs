@@ -22,6 +22,7 @@ pub mod mesh_check;
 mod par;
 pub mod phantom;
 pub mod pipeline;
+pub mod progress;
 mod radix;
 pub mod register;
 pub mod session;

@@ -96,10 +96,17 @@ fn map_in_order<T: Sync, R: Send>(
         }
         out
     };
+    // The workers see the call's cancel flag and count their finished items (`progress`).
+    let progress = crate::progress::shared();
     std::thread::scope(|s| {
         let take = &take;
         let handles: Vec<_> = (1..threads)
-            .map(|_| s.spawn(move || with_max_threads(worker_cap, take)))
+            .map(|_| {
+                let progress = progress.clone();
+                s.spawn(move || {
+                    crate::progress::with_shared(progress, || with_max_threads(worker_cap, take))
+                })
+            })
             .collect();
         let mut all = with_max_threads(worker_cap, take);
         for h in handles {

@@ -11,13 +11,15 @@
 //!
 //! One file per handle family: [`session`] (lifetime, adding and listing teeth), [`mesh`]
 //! (reading a tooth back), [`file`](mod@file) (reading mesh files), [`register`] (options, registration and its report), [`fuse`]
-//! (one-call fuse, fused meshes and their quality), [`stages`] (cut and stitch as separate
+//! (one-call fuse, fused meshes and their quality), [`progress`] (the progress callback and
+//! cancel), [`stages`] (cut and stitch as separate
 //! stages, the cut roots), plus [`status`], [`version`] and the [`boundary`] helpers.
 
 pub mod boundary;
 pub mod file;
 pub mod fuse;
 pub mod mesh;
+pub mod progress;
 pub mod register;
 pub mod session;
 pub mod stages;
@@ -28,6 +30,7 @@ pub mod volume;
 pub use file::*;
 pub use fuse::*;
 pub use mesh::*;
+pub use progress::*;
 pub use register::*;
 pub use session::*;
 pub use stages::*;

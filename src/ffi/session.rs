@@ -45,6 +45,8 @@ pub struct toothfuse_session {
     /// The cap on the threads of this session's calls (0: none), see
     /// `toothfuse_session_set_max_threads`.
     max_threads: Cell<usize>,
+    /// The progress callback of this session's calls, see `toothfuse_session_set_progress`.
+    pub(super) progress: Cell<Option<super::progress::Hook>>,
 }
 
 impl toothfuse_session {
@@ -54,6 +56,7 @@ impl toothfuse_session {
             last_error: RefCell::new(CString::default()),
             poisoned: Cell::new(false),
             max_threads: Cell::new(0),
+            progress: Cell::new(None),
         }
     }
 
@@ -135,11 +138,34 @@ where
     if let Err(f) = s.check_poison() {
         return s.finish(Ok(Err(f)));
     }
-    let cap = s.max_threads.get();
+    let (cap, hook) = (s.max_threads.get(), s.progress.get());
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        crate::par::with_max_threads(cap, || f(&mut s.core))
+        super::progress::with_hook(hook, || {
+            crate::par::with_max_threads(cap, || f(&mut s.core))
+        })
     }));
     s.finish(outcome)
+}
+
+/// Runs `set` on the session behind `ptr` to change one of its settings (the thread cap, the
+/// progress callback): NULL check, poison check, last-error bookkeeping; no library work runs.
+///
+/// # Safety
+/// `ptr` must be NULL or a live session from `toothfuse_session_new`, used by no one else
+/// during the call.
+pub(super) unsafe fn with_settings(
+    ptr: *mut toothfuse_session,
+    set: impl FnOnce(&toothfuse_session),
+) -> toothfuse_status {
+    // SAFETY: the caller guarantees `ptr` is NULL or a live session nobody else uses now.
+    let Some(s) = (unsafe { ptr.as_ref() }) else {
+        return toothfuse_status::NullParameter;
+    };
+    if let Err(f) = s.check_poison() {
+        return s.finish(Ok(Err(f)));
+    }
+    set(s);
+    s.finish(Ok(Ok(())))
 }
 
 /// Decodes a `toothfuse_modality`.
@@ -398,15 +424,8 @@ pub unsafe extern "C" fn toothfuse_session_set_max_threads(
     max_threads: u32,
 ) -> toothfuse_status {
     ffi_panic_boundary! {
-        // SAFETY: the caller guarantees `session` is NULL or a live session nobody else uses now.
-        let Some(s) = (unsafe { session.as_ref() }) else {
-            return toothfuse_status::NullParameter;
-        };
-        if let Err(f) = s.check_poison() {
-            return s.finish(Ok(Err(f)));
-        }
-        s.max_threads.set(max_threads as usize);
-        s.finish(Ok(Ok(())))
+        // SAFETY: forwarded contract on `session`.
+        unsafe { with_settings(session, |s| s.max_threads.set(max_threads as usize)) }
     }
 }
 

@@ -49,6 +49,9 @@ pub enum toothfuse_status {
     /// (another patient, the other jaw, tooth numbers shifted along the arch); the message names
     /// the likely cause. Set `accept_questionable` in the options to register anyway.
     RegistrationRejected = 15,
+    /// The session's progress callback (`toothfuse_session_set_progress`) asked the call to
+    /// stop; the session keeps what it held before the call.
+    Cancelled = 16,
 }
 
 impl From<ErrorKind> for toothfuse_status {
@@ -65,13 +68,14 @@ impl From<ErrorKind> for toothfuse_status {
             ErrorKind::WrongState => Self::WrongState,
             ErrorKind::Mirrored => Self::Mirrored,
             ErrorKind::RegistrationRejected => Self::RegistrationRejected,
+            ErrorKind::Cancelled => Self::Cancelled,
         }
     }
 }
 
 impl toothfuse_status {
     /// Every status, in numeric order.
-    pub(crate) const ALL: [toothfuse_status; 16] = [
+    pub(crate) const ALL: [toothfuse_status; 17] = [
         Self::Ok,
         Self::NullParameter,
         Self::InvalidArgument,
@@ -88,6 +92,7 @@ impl toothfuse_status {
         Self::Poisoned,
         Self::Mirrored,
         Self::RegistrationRejected,
+        Self::Cancelled,
     ];
 
     /// The status with numeric value `v`, if any.
@@ -116,6 +121,7 @@ impl toothfuse_status {
             Self::RegistrationRejected => {
                 "registration rejected: the IOS and the CBCT do not belong together\0"
             }
+            Self::Cancelled => "cancelled by the progress callback\0",
         }
     }
 }
@@ -142,7 +148,7 @@ mod tests {
             let m = s.message();
             assert!(m.ends_with('\0') && m.len() > 2 && !m[..m.len() - 1].contains('\0'));
         }
-        assert_eq!(toothfuse_status::from_u32(16), None);
+        assert_eq!(toothfuse_status::from_u32(17), None);
         assert_eq!(
             toothfuse_status::from(ErrorKind::NotManifold),
             toothfuse_status::NotManifold

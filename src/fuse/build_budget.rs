@@ -71,9 +71,11 @@ pub(super) fn made() -> usize {
     MADE.with(Cell::get)
 }
 
-/// Whether another build may be started.
+/// Whether another build may be started: the tooth has builds left and the caller's progress
+/// callback has not asked to stop ([`crate::progress`]; on the calling thread it is asked here,
+/// so a cancel is answered within one build).
 pub(super) fn more() -> bool {
-    made() < LIMIT.with(Cell::get)
+    made() < LIMIT.with(Cell::get) && crate::progress::go_on()
 }
 
 #[cfg(test)]

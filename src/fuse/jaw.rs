@@ -5,6 +5,7 @@
 use super::FusedTooth;
 use super::{CutTooth, FuseOptions, VertexSource, cut_tooth, stitch_tooth};
 use crate::mesh::{LabeledMesh, TriMesh, split_by_face_labels, split_by_vertex_labels};
+use crate::progress::Stage;
 use crate::{Error, Result, Rigid};
 use std::collections::BTreeMap;
 
@@ -82,7 +83,9 @@ pub fn cut_jaw(
     transforms: &BTreeMap<u8, ToothTransforms>,
     opts: &FuseOptions,
 ) -> Result<CutJaw> {
-    Ok(cut_crowns(&ios_crowns(ios)?, cbct, transforms, opts))
+    let cut = cut_crowns(&ios_crowns(ios)?, cbct, transforms, opts);
+    crate::progress::check(crate::progress::Stage::Cut)?;
+    Ok(cut)
 }
 
 /// [`cut_jaw`] on the jaw's crowns as [`ios_crowns`] gives them.
@@ -109,16 +112,19 @@ pub(crate) fn cut_crowns(
         work.push((fdi, crown, tooth, t));
     }
     // The largest crowns and teeth first (see `map_ordered_by_cost`).
+    crate::progress::start(Stage::Cut, work.len());
     let results = crate::par::map_ordered_by_cost(
         &work,
         |w| w.1.triangles.len() + w.2.triangles.len(),
         |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
-            (
-                fdi,
-                cut_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts),
-            )
+            let r = crate::progress::check(Stage::Cut).and_then(|()| {
+                cut_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts)
+            });
+            crate::progress::advance();
+            (fdi, r)
         },
     );
+    crate::progress::ended();
     for (fdi, r) in results {
         match r {
             Ok(c) => {
@@ -151,14 +157,18 @@ pub(crate) fn cut_crowns(
 /// threads, deterministic) and merges the fused teeth (and, with
 /// [`FuseOptions::pass_through_cbct_only`], the CBCT-only teeth) into one mesh. The cut's
 /// failures are carried over; a tooth whose stitching fails joins them. `opts.cut` is not used.
+/// Under a progress callback ([`crate::progress::with_progress`]) that asks to stop, the teeth
+/// not yet stitched join the failures with [`Error::Cancelled`].
 pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
     let work: Vec<&CutTooth> = cut.teeth.values().collect();
+    crate::progress::start(Stage::Stitch, work.len());
     // The longest margins first: the band grows with the margin (see `map_ordered_by_cost`).
     let results = crate::par::map_ordered_by_cost(
         &work,
         |c| c.margin.len(),
-        |c| (c.fdi(), stitch_tooth(c, opts)),
+        |c| (c.fdi(), stitch_counted(|| stitch_tooth(c, opts))),
     );
+    crate::progress::ended();
     merged(results, cut, opts)
 }
 
@@ -171,6 +181,7 @@ pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw 
         .into_iter()
         .map(|(fdi, c)| (fdi, c.margin.len(), std::sync::Mutex::new(Some(c))))
         .collect();
+    crate::progress::start(Stage::Stitch, work.len());
     let results = crate::par::map_ordered_by_cost(
         &work,
         |w| w.1,
@@ -180,7 +191,7 @@ pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw 
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
                 .take();
             let r = match taken {
-                Some(c) => stitch_tooth(&c, opts),
+                Some(c) => stitch_counted(|| stitch_tooth(&c, opts)),
                 None => Err(Error::InvalidArgument(format!(
                     "tooth {fdi}: handed out for stitching twice"
                 ))),
@@ -188,7 +199,17 @@ pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw 
             (*fdi, r)
         },
     );
+    crate::progress::ended();
     merged(results, &cut, opts)
+}
+
+/// One tooth's stitching `stitch` as a unit of the stitching stage's progress: not started once
+/// the caller's progress callback has asked to stop ([`Error::Cancelled`] instead), counted
+/// when done.
+fn stitch_counted(stitch: impl FnOnce() -> Result<FusedTooth>) -> Result<FusedTooth> {
+    let r = crate::progress::check(Stage::Stitch).and_then(|()| stitch());
+    crate::progress::advance();
+    r
 }
 
 /// The fused jaw of the stitching `results` (in FDI order) of `cut`'s teeth.
@@ -241,8 +262,7 @@ pub fn fuse_jaw(
     transforms: &BTreeMap<u8, ToothTransforms>,
     opts: &FuseOptions,
 ) -> Result<FusedJaw> {
-    Ok(stitch_jaw_owned(
-        cut_jaw(ios, cbct, transforms, opts)?,
-        opts,
-    ))
+    let jaw = stitch_jaw_owned(cut_jaw(ios, cbct, transforms, opts)?, opts);
+    crate::progress::check(Stage::Stitch)?;
+    Ok(jaw)
 }

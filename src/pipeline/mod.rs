@@ -225,10 +225,12 @@ fn run(
     let register_ms = ms(t1);
     let t2 = Instant::now();
     let cut = crate::fuse::cut_crowns(&crowns, cbct, &transforms_of(&registration), &opts.fuse);
+    crate::progress::check(crate::progress::Stage::Cut)?;
     drop(crowns);
     let cut_ms = ms(t2);
     let t3 = Instant::now();
     let jaw = crate::fuse::stitch_jaw_owned(cut, &opts.fuse);
+    crate::progress::check(crate::progress::Stage::Stitch)?;
     let stitch_ms = ms(t3);
     Ok(PipelineResult {
         registration,

@@ -373,6 +373,8 @@ pub fn register(
     opts.check()?;
     let t0 = Instant::now();
     let mut timing = Timing::default();
+    use crate::progress::{Stage, step};
+    crate::progress::start(Stage::Register, 5);
     let mut skipped = Vec::new();
     for f in ios.keys().chain(cbct.keys()) {
         crate::arch::check_fdi(*f as i32)?;
@@ -396,9 +398,11 @@ pub fn register(
         teeth.insert(*f, d?);
     }
     timing.prepare_ms = ms(t0);
+    step(Stage::Register)?;
     let tg = Instant::now();
     let (gate_report, gate_warnings) = run_gate(&mut teeth, &mut skipped, opts)?;
     timing.gate_ms = ms(tg);
+    step(Stage::Register)?;
     let order = crate::arch::arch_order(&teeth.keys().copied().collect::<Vec<_>>());
 
     // Stage 1: centroid alignment, eq. (1) (or the caller's transform).
@@ -410,11 +414,13 @@ pub fn register(
     let t2 = Instant::now();
     let (coarse_t, offset, coarse_stats) = coarse_stage(&teeth, initial, opts);
     timing.coarse_ms = ms(t2);
+    step(Stage::Register)?;
 
     // Stage 3: fine registration, eq. (3) or the smooth-drift model.
     let t3 = Instant::now();
     let (ios_to_cbct, fine_stats) = fine_stage(&teeth, &order, &coarse_t, offset, opts);
     timing.fine_ms = ms(t3);
+    step(Stage::Register)?;
 
     // Report: SD per tooth, plausibility guard, warnings.
     let t4 = Instant::now();
@@ -443,6 +449,7 @@ pub fn register(
         out.insert(*f, reg);
     }
     timing.report_ms = ms(t4);
+    step(Stage::Register)?;
     timing.total_ms = ms(t0);
     Ok(Registration {
         frame: opts.frame,

@@ -142,6 +142,7 @@ impl Session {
     pub fn fuse_registered(&mut self, opts: &PipelineOptions) -> Result<&Fused> {
         let cut = self.make_cut(opts)?;
         let result = pipeline::stitch(&cut, opts);
+        crate::progress::check(crate::progress::Stage::Stitch)?;
         let report_json = report_json_of(&result)?;
         self.cut = Some(cut);
         Ok(self.keep_fused(result, report_json, false))
@@ -183,6 +184,7 @@ impl Session {
             )
         })?;
         let result = pipeline::stitch(cut, opts);
+        crate::progress::check(crate::progress::Stage::Stitch)?;
         let report_json = report_json_of(&result)?;
         Ok(self.keep_fused(result, report_json, false))
     }

@@ -89,4 +89,19 @@ fn a_tooth_makes_at_most_its_allowed_builds_and_stays_closed() {
     let _ = stitched(ct);
     assert_eq!(made(), 2);
     drop(outer);
+    // A progress callback that asks to stop ends the tooth's builds at the next one: it is asked
+    // before each build after the first, and once it has asked to stop nothing more is built;
+    // the first build is kept, one closed manifold.
+    let asked = std::rc::Rc::new(Cell::new(0usize));
+    let counter = std::rc::Rc::clone(&asked);
+    let (f, m, all) = crate::progress::with_progress(
+        move |_| {
+            counter.set(counter.get() + 1);
+            std::ops::ControlFlow::Break(())
+        },
+        || stitched(ct),
+    );
+    assert_eq!((m, all, asked.get()), (1, 1, 1));
+    let q = &f.quality;
+    assert!(q.closed && q.manifold && q.components == 1, "{q:?}");
 }

@@ -1,0 +1,271 @@
+//! The progress callback through the C ABI on a small synthetic jaw: what it is told and on
+//! which thread, that it changes no result, and that a cancel from it in any stage returns
+//! CANCELLED with the session's earlier results kept bit for bit.
+
+mod ffi_common;
+
+use ffi_common::{Session, add_phantom, phantom};
+use std::ffi::{CStr, c_void};
+use std::ptr;
+use std::thread::ThreadId;
+use toothfuse::ffi::*;
+
+/// What the callback saw, and when it asks to stop.
+struct Log {
+    /// Stop at the first report of this stage with at least this many units done.
+    stop_at: Option<(toothfuse_stage, usize)>,
+    seen: Vec<(toothfuse_stage, usize, usize, ThreadId)>,
+}
+
+unsafe extern "C" fn record(
+    user_data: *mut c_void,
+    stage: toothfuse_stage,
+    done: usize,
+    total: usize,
+) -> i32 {
+    // SAFETY: the tests pass a live `Log` they own exclusively for the call.
+    let log = unsafe { &mut *user_data.cast::<Log>() };
+    log.seen
+        .push((stage, done, total, std::thread::current().id()));
+    i32::from(log.stop_at.is_some_and(|(s, d)| s == stage && done >= d))
+}
+
+fn set(s: &Session, log: Option<&mut Log>) {
+    let (cb, data): (toothfuse_progress_fn, *mut c_void) = match log {
+        Some(l) => (Some(record), ptr::from_mut(l).cast()),
+        None => (None, ptr::null_mut()),
+    };
+    // SAFETY: live session; the log outlives every call made while it is set.
+    let st = unsafe { toothfuse_session_set_progress(s.0, cb, data) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+}
+
+/// The whole fused jaw (positions as bits, indices), the report JSON and a registered
+/// transform: what a cancelled call must leave as it was.
+fn held(s: &Session) -> (Vec<u64>, Vec<u32>, String, Vec<u64>) {
+    let (mut nv, mut ni, mut len) = (0usize, 0usize, 0usize);
+    // SAFETY: live session; buffers sized from the size queries.
+    unsafe {
+        assert_eq!(
+            toothfuse_session_fused_size(s.0, 0, &mut nv, &mut ni),
+            toothfuse_status::Ok,
+            "{}",
+            s.error()
+        );
+        let mut v = vec![0f64; 3 * nv];
+        let mut t = vec![0u32; ni];
+        assert_eq!(
+            toothfuse_session_copy_fused_vertices(
+                s.0,
+                0,
+                v.as_mut_ptr().cast(),
+                nv,
+                24,
+                TOOTHFUSE_SCALAR_FLOAT64
+            ),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_copy_fused_indices(s.0, 0, t.as_mut_ptr(), ni),
+            toothfuse_status::Ok
+        );
+        assert_eq!(
+            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
+            toothfuse_status::Ok
+        );
+        let mut buf = vec![0 as std::ffi::c_char; len + 1];
+        assert_eq!(
+            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
+            toothfuse_status::Ok
+        );
+        let json = CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned();
+        let mut teeth = [0i32; 52];
+        let mut n = 0usize;
+        assert_eq!(
+            toothfuse_session_fused_teeth(s.0, teeth.as_mut_ptr(), 52, &mut n),
+            toothfuse_status::Ok
+        );
+        let mut m = [0f64; 16];
+        assert_eq!(
+            toothfuse_session_transform(
+                s.0,
+                teeth[0],
+                TOOTHFUSE_TRANSFORM_CBCT_TO_OUTPUT,
+                m.as_mut_ptr()
+            ),
+            toothfuse_status::Ok,
+            "{}",
+            s.error()
+        );
+        (
+            v.iter().map(|x| x.to_bits()).collect(),
+            t,
+            json,
+            m.iter().map(|x| x.to_bits()).collect(),
+        )
+    }
+}
+
+/// The report JSON with its timings left out.
+fn without_timing(json: &str) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
+    v["timing_ms"] = serde_json::Value::Null;
+    v
+}
+
+#[test]
+fn null_session_is_refused_and_a_callback_is_set_and_removed() {
+    // SAFETY: NULL is allowed and refused.
+    let st =
+        unsafe { toothfuse_session_set_progress(ptr::null_mut(), Some(record), ptr::null_mut()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    let s = Session::new();
+    let mut log = Log {
+        stop_at: None,
+        seen: Vec::new(),
+    };
+    set(&s, Some(&mut log));
+    set(&s, None);
+    // SAFETY: a NULL-terminated static string.
+    let m = unsafe { CStr::from_ptr(toothfuse_status_string(toothfuse_status::Cancelled as u32)) };
+    assert!(m.to_str().unwrap().contains("cancelled"));
+}
+
+#[test]
+fn reports_come_in_stage_order_on_the_calling_thread_and_change_nothing() {
+    let p = phantom(5);
+    let (plain, watched) = (Session::new(), Session::new());
+    let mut log = Log {
+        stop_at: None,
+        seen: Vec::new(),
+    };
+    set(&watched, Some(&mut log));
+    for s in [&plain, &watched] {
+        add_phantom(s, &p);
+        // SAFETY: live session, NULL options = defaults.
+        let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    }
+    let (a, b) = (held(&plain), held(&watched));
+    assert_eq!((&a.0, &a.1, &a.3), (&b.0, &b.1, &b.3));
+    assert_eq!(without_timing(&a.2), without_timing(&b.2));
+    let me = std::thread::current().id();
+    assert!(
+        log.seen.iter().all(|r| r.3 == me),
+        "a report from another thread"
+    );
+    let stages: Vec<toothfuse_stage> = log.seen.iter().map(|r| r.0).collect();
+    assert!(stages.windows(2).all(|w| w[0] <= w[1]), "{stages:?}");
+    for stage in [
+        TOOTHFUSE_STAGE_REGISTER,
+        TOOTHFUSE_STAGE_CUT,
+        TOOTHFUSE_STAGE_STITCH,
+    ] {
+        let of: Vec<_> = log.seen.iter().filter(|r| r.0 == stage).collect();
+        assert!(!of.is_empty(), "stage {stage} not reported");
+        assert_eq!(of[0].1, 0, "stage {stage} starts at 0");
+        let last = of.last().unwrap();
+        assert_eq!(last.1, last.2, "stage {stage} ends at its total");
+        assert!(of.windows(2).all(|w| w[0].1 <= w[1].1 && w[0].2 == w[1].2));
+    }
+}
+
+#[test]
+fn a_cancel_in_any_stage_returns_cancelled_and_keeps_the_earlier_results() {
+    let p = phantom(5);
+    let s = Session::new();
+    add_phantom(&s, &p);
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    let before = held(&s);
+    type Call =
+        unsafe extern "C" fn(*mut toothfuse_session, *const toothfuse_options) -> toothfuse_status;
+    let calls: [(&str, Call, toothfuse_stage); 5] = [
+        ("fuse", toothfuse_session_fuse, TOOTHFUSE_STAGE_REGISTER),
+        ("fuse", toothfuse_session_fuse, TOOTHFUSE_STAGE_CUT),
+        ("fuse", toothfuse_session_fuse, TOOTHFUSE_STAGE_STITCH),
+        (
+            "fuse_registered",
+            toothfuse_session_fuse_registered,
+            TOOTHFUSE_STAGE_STITCH,
+        ),
+        (
+            "register",
+            toothfuse_session_register,
+            TOOTHFUSE_STAGE_REGISTER,
+        ),
+    ];
+    let names = ["", "register", "cut", "stitch"];
+    for (name, call, stage) in calls {
+        let mut log = Log {
+            stop_at: Some((stage, 1)),
+            seen: Vec::new(),
+        };
+        set(&s, Some(&mut log));
+        // SAFETY: live session, NULL options = defaults; the log outlives the call.
+        let st = unsafe { call(s.0, ptr::null()) };
+        let tag = format!("{name} cancelled in stage {stage}");
+        assert_eq!(st, toothfuse_status::Cancelled, "{tag}: {}", s.error());
+        assert!(
+            s.error().contains(names[stage as usize]),
+            "{tag}: {}",
+            s.error()
+        );
+        set(&s, None);
+        // Not asked again after it asked to stop.
+        assert_eq!(
+            log.seen.iter().filter(|r| r.0 == stage && r.1 >= 1).count(),
+            1,
+            "{tag}"
+        );
+        let after = held(&s);
+        assert_eq!(
+            (&before.0, &before.1, &before.3),
+            (&after.0, &after.1, &after.3),
+            "{tag}"
+        );
+        assert_eq!(before.2, after.2, "{tag}: report");
+    }
+    // The separate stages: a cancelled cut, then a cut held and its stitching cancelled.
+    for (call, stage) in [
+        (toothfuse_session_cut as Call, TOOTHFUSE_STAGE_CUT),
+        (toothfuse_session_stitch as Call, TOOTHFUSE_STAGE_STITCH),
+    ] {
+        if stage == TOOTHFUSE_STAGE_STITCH {
+            // SAFETY: live session, NULL options = defaults.
+            let st = unsafe { toothfuse_session_cut(s.0, ptr::null()) };
+            assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        }
+        let mut log = Log {
+            stop_at: Some((stage, 0)),
+            seen: Vec::new(),
+        };
+        set(&s, Some(&mut log));
+        // SAFETY: live session, NULL options = defaults; the log outlives the call.
+        let st = unsafe { call(s.0, ptr::null()) };
+        assert_eq!(
+            st,
+            toothfuse_status::Cancelled,
+            "stage {stage}: {}",
+            s.error()
+        );
+        set(&s, None);
+        assert_eq!(log.seen.len(), 1, "stage {stage}: {:?}", log.seen);
+        let after = held(&s);
+        assert_eq!(
+            (&before.0, &before.1, &before.3),
+            (&after.0, &after.1, &after.3)
+        );
+        assert_eq!(before.2, after.2, "stage {stage}: report");
+    }
+    // The session still works, without the callback.
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    let again = held(&s);
+    assert_eq!(
+        (&before.0, &before.1, &before.3),
+        (&again.0, &again.1, &again.3)
+    );
+}
