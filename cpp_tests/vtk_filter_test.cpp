@@ -322,6 +322,65 @@ TEST(VtkToothfuseFilter, OneThreadGivesTheSameOutput) {
   }
 }
 
+// The update's progress comes as ProgressEvent, rising from 0 to 1 on the updating thread;
+// SetAbortExecute(1) from an observer during the stitching cancels it: an empty output, no
+// error, status CANCELLED; the next update without the abort fuses the jaw as before.
+TEST(VtkToothfuseFilter, ReportsProgressAndAbortsFromAnObserver) {
+  Demo& d = demo(2);
+  ASSERT_TRUE(d.ok);
+  struct Watch {
+    vtkToothfuseFilter* filter = nullptr;
+    std::vector<double> seen;
+    double abortAt = 2.0;  // never
+  } w;
+  vtkNew<vtkToothfuseFilter> f;
+  w.filter = f;
+  ErrorSink errors(f);
+  vtkNew<vtkCallbackCommand> cb;
+  cb->SetClientData(&w);
+  cb->SetCallback([](vtkObject*, unsigned long, void* client, void* data) {
+    auto* w = static_cast<Watch*>(client);
+    double p = *static_cast<double*>(data);
+    w->seen.push_back(p);
+    if (p >= w->abortAt) w->filter->SetAbortExecute(1);
+  });
+  f->AddObserver(vtkCommand::ProgressEvent, cb);
+  f->SetIOSInputData(d.iosPd);
+  f->SetCBCTInputData(d.cbctPd);
+  f->SetCBCTLabelArrayName("tooth");
+  f->Update();
+  EXPECT_TRUE(errors.messages.empty()) << errors.messages.front();
+  EXPECT_EQ(f->GetLastStatus(), 0);
+  const vtkIdType points = f->GetOutput()->GetNumberOfPoints();
+  ASSERT_GT(points, 1000);
+  ASSERT_GE(w.seen.size(), 4u);
+  EXPECT_TRUE(std::is_sorted(w.seen.begin(), w.seen.end())) << ::testing::PrintToString(w.seen);
+  EXPECT_EQ(w.seen.back(), 1.0);
+  EXPECT_TRUE(std::any_of(w.seen.begin(), w.seen.end(),
+                          [](double p) { return p > 0.3 && p < 1.0; }))
+      << "no report within the stitching";
+
+  // Aborted within the stitching.
+  w.seen.clear();
+  w.abortAt = 0.3;
+  f->Modified();
+  f->Update();
+  EXPECT_TRUE(errors.messages.empty()) << errors.messages.front();
+  EXPECT_TRUE(errors.pipeline.empty()) << errors.pipeline.front();
+  EXPECT_EQ(f->GetLastStatus(), static_cast<int>(TOOTHFUSE_STATUS_CANCELLED));
+  EXPECT_EQ(f->GetOutput()->GetNumberOfPoints(), 0);
+  ASSERT_FALSE(w.seen.empty());
+  EXPECT_LT(w.seen.back(), 1.0) << "the update ran to its end";
+
+  // Without the abort, the same jaw again.
+  w.abortAt = 2.0;
+  f->SetAbortExecute(0);
+  f->Modified();
+  f->Update();
+  EXPECT_EQ(f->GetLastStatus(), 0);
+  EXPECT_EQ(f->GetOutput()->GetNumberOfPoints(), points);
+}
+
 // jaw_7: seed 8, partial lower arch (3 teeth; a tooth whose fusion fails is reported skipped).
 TEST(VtkToothfuseFilter, FusesDemoJawInCbctFrameWithCbctRootPoints) {
   Demo& d = demo(7);

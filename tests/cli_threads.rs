@@ -1,7 +1,7 @@
 //! `toothfuse --threads N`: the cap on the threads of the whole process. Under `--threads 1`
 //! the process never runs a second thread, under `--threads 2` never a third (its thread count
 //! watched in /proc while it fuses), and its files are those of an uncapped run, byte for byte
-//! (report.json but its timings).
+//! (report.json but its timings). `toothfuse --progress`: the steps on stderr, the same files.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -113,5 +113,73 @@ fn one_thread_runs_alone_and_writes_the_same_files() {
     // The cap is a number.
     let (ok, _) = run_watching_threads(&["--threads", "many", "demo", "--out", "x"]);
     assert!(!ok, "--threads many is refused");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `--progress` prints each stage's steps on stderr in order, from 0 to the stage's total, and
+/// the files are those of a run without it.
+#[test]
+fn progress_lines_come_in_stage_order_and_change_no_file() {
+    let d = tmp("progress");
+    let demo = d.join("demo");
+    let bin = env!("CARGO_BIN_EXE_toothfuse");
+    let out = |args: &[&str]| {
+        let o = Command::new(bin)
+            .args(args)
+            .output()
+            .expect("run toothfuse");
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8(o.stderr).unwrap()
+    };
+    let demo_s = demo.to_str().unwrap();
+    out(&[
+        "demo",
+        "--seed",
+        "6",
+        "--variant",
+        "partial",
+        "--out",
+        demo_s,
+    ]);
+    let (ios, cbct) = (demo.join("ios.ply"), demo.join("cbct.ply"));
+    let (with, without) = (d.join("with"), d.join("without"));
+    let fuse = |dir: &Path, extra: &[&str]| {
+        let mut args = extra.to_vec();
+        args.extend(["fuse", "--labels", "fdi", "--ios", ios.to_str().unwrap()]);
+        args.extend([
+            "--cbct",
+            cbct.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        out(&args)
+    };
+    let stderr = fuse(&with, &["--progress"]);
+    let quiet = fuse(&without, &[]);
+    assert!(!quiet.contains("toothfuse: stitch"), "{quiet}");
+    assert_eq!(files(&with), files(&without));
+    // (stage rank, done, total) of each progress line.
+    let steps: Vec<(usize, usize, usize)> = stderr
+        .lines()
+        .filter_map(|l| {
+            let mut w = l.strip_prefix("toothfuse: ")?.split([' ', '/']);
+            let name = w.next()?;
+            let stage = ["register", "cut", "stitch"]
+                .iter()
+                .position(|s| *s == name)?;
+            Some((stage, w.next()?.parse().ok()?, w.next()?.parse().ok()?))
+        })
+        .collect();
+    assert!(steps.windows(2).all(|w| w[0] < w[1]), "{stderr}");
+    for stage in 0..3 {
+        let of: Vec<_> = steps.iter().filter(|s| s.0 == stage).collect();
+        assert!(!of.is_empty(), "stage {stage}: {stderr}");
+        assert_eq!(of[0].1, 0, "{stderr}");
+        assert_eq!(of.last().map(|s| s.1), Some(of[0].2), "{stderr}");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

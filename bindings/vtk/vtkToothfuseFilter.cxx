@@ -29,6 +29,7 @@
 #include <vtkType.h>
 #include <vtkUnsignedCharArray.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -44,6 +45,24 @@ struct SessionFree {
   void operator()(toothfuse_session* s) const { toothfuse_session_free(s); }
 };
 using SessionPtr = std::unique_ptr<toothfuse_session, SessionFree>;
+
+/// The session's progress callback: the filter's progress (registration 0-0.2, crown cut
+/// 0.2-0.3, stitching 0.3-1) through UpdateProgress, and its AbortExecute flag as the cancel.
+int32_t ReportProgress(void* filter, toothfuse_stage stage, size_t done, size_t total) {
+  // Stage k spans [bound[k - 1], bound[k]]; each stage's end is exactly the next one's start,
+  // so the reports never decrease.
+  static const double bound[] = {0.0, 0.2, 0.3, 1.0};
+  const size_t k = stage >= 1 && stage <= TOOTHFUSE_STAGE_STITCH ? stage : 1;
+  const double a = bound[k - 1], b = bound[k];
+  const double within = total > 0 ? double(done) / double(total) : 0.0;
+  auto* f = static_cast<vtkToothfuseFilter*>(filter);
+  try {
+    f->UpdateProgress(std::min(b, a + (b - a) * within));
+  } catch (...) {
+    return 1;  // an observer threw: nothing may unwind through the library
+  }
+  return f->GetAbortExecute() ? 1 : 0;
+}
 
 /// One input as C API buffers. Vertices point into `mesh` (kept alive here) or `xyz`.
 struct JawBuffers {
@@ -345,6 +364,8 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
 
   st = toothfuse_session_set_max_threads(s, static_cast<uint32_t>(this->MaxThreads));
   if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_max_threads");
+  st = toothfuse_session_set_progress(s, ReportProgress, this);
+  if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_progress");
   if (this->IOSRepair) {
     st = toothfuse_session_set_ios_repair(s, true, this->MaxHoleFraction);
     if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_ios_repair");
@@ -373,8 +394,14 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   options.preset = static_cast<toothfuse_preset>(this->Preset);
   options.frame = static_cast<toothfuse_frame>(this->Frame);
   options.accept_questionable = this->AcceptQuestionable ? 1u : 0u;
-  if ((st = toothfuse_session_fuse(s, &options)) != TOOTHFUSE_STATUS_OK)
-    return failed("toothfuse_session_fuse");
+  st = toothfuse_session_fuse(s, &options);
+  if (st == TOOTHFUSE_STATUS_CANCELLED) {
+    // Aborted (SetAbortExecute): an empty output, no error, the status kept.
+    this->LastStatus = static_cast<int>(st);
+    vtkDebugMacro(<< "fusion cancelled: " << toothfuse_session_last_error(s));
+    return 1;
+  }
+  if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_fuse");
 
   // Results: fused and skipped teeth, report JSON.
   int32_t fdi[52];

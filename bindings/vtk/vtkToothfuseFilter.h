@@ -130,6 +130,13 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   vtkSetClampMacro(MaxThreads, int, 0, 1 << 20);
   vtkGetMacro(MaxThreads, int);
 
+  /// Progress and abort: an update reports the fusion's progress as ProgressEvent (the
+  /// registration 0-0.2, the crown cut 0.2-0.3, the stitching 0.3-1; on the updating thread,
+  /// between teeth and band builds), and SetAbortExecute(1), from a ProgressEvent observer or
+  /// another thread, cancels it within about one band build: the output is then empty, no error
+  /// is raised and GetLastStatus() is TOOTHFUSE_STATUS_CANCELLED. The output does not depend on
+  /// the observers.
+  ///
   /// The toothfuse status of the last update (TOOTHFUSE_STATUS_OK = 0 after a success; e.g.
   /// TOOTHFUSE_STATUS_UNIT_MISMATCH for input not in millimetres).
   int GetLastStatus() const { return this->LastStatus; }

@@ -229,3 +229,87 @@ def test_per_jaw_volume_split_by_the_ios_crowns_of_a_synthetic_arch():
         for f in fdis:
             ws = s.tooth_report(f)["warnings"]
             assert any("split from the per-jaw teeth mask" in w for w in ws), (f, ws)
+
+
+def _demo_args():
+    d = jaw_dir(2)
+    ios = toothfuse.read_mesh(d / "ios.ply")
+    cbct = toothfuse.read_mesh(d / "cbct.ply")
+    return (ios.positions, ios.triangles, ios.labels, cbct.positions, cbct.triangles, cbct.labels)
+
+
+def test_progress_is_reported_stage_by_stage_and_changes_nothing():
+    args = _demo_args()
+    seen = []
+    watched = toothfuse.fuse(*args, progress=lambda *r: seen.append(r))
+    plain = toothfuse.fuse(*args)
+    assert watched.positions.tobytes() == plain.positions.tobytes()
+    assert np.array_equal(watched.triangles, plain.triangles)
+    stages = [r[0] for r in seen]
+    order = ["register", "cut", "stitch"]
+    assert sorted(stages, key=order.index) == stages and set(stages) == set(order)
+    for stage in order:
+        of = [r for r in seen if r[0] == stage]
+        assert of[0][1] == 0 and of[-1][1] == of[-1][2], of
+        assert all(a[1] <= b[1] and a[2] == b[2] for a, b in zip(of, of[1:])), of
+    assert [r[2] for r in seen if r[0] == "stitch"][-1] == len(plain.teeth)
+
+
+def test_a_cancel_raises_cancelled_and_the_session_keeps_its_results():
+    args = _demo_args()
+    with toothfuse.Session() as s:
+        s.add_jaw(toothfuse.IOS, *args[:3])
+        s.add_jaw(toothfuse.CBCT, *args[3:])
+        teeth = s.fuse()
+        before = s.fused_mesh(0)
+        report = s.report_json()
+        # A truthy return cancels in the stage it is returned in.
+        for stage in ["register", "cut", "stitch"]:
+            s.set_progress(lambda st, done, total, stage=stage: st == stage)
+            with pytest.raises(toothfuse.ToothfuseError) as e:
+                s.fuse()
+            assert e.value.status == toothfuse.STATUS_CANCELLED and stage in str(e.value)
+        # An exception in the callback cancels and is raised again, the cancel as its cause.
+        def boom(stage, done, total):
+            if stage == "cut":
+                raise ValueError("stop here")
+        s.set_progress(boom)
+        with pytest.raises(ValueError, match="stop here") as e:
+            s.fuse()
+        assert isinstance(e.value.__cause__, toothfuse.ToothfuseError)
+        assert e.value.__cause__.status == toothfuse.STATUS_CANCELLED
+        with pytest.raises(TypeError):
+            s.set_progress(3)
+        assert s.fused_teeth() == teeth and s.report_json() == report
+        assert all(a.tobytes() == b.tobytes() for a, b in zip(before, s.fused_mesh(0)))
+        s.set_progress(None)
+        assert s.fuse() == teeth
+
+
+def test_ctrl_c_cancels_a_running_fuse_without_a_callback():
+    import _thread
+    import threading
+    import time
+    args = _demo_args()
+    with toothfuse.Session() as s:
+        s.add_jaw(toothfuse.IOS, *args[:3])
+        s.add_jaw(toothfuse.CBCT, *args[3:])
+        # Ctrl-C while the library runs: the interrupt waits for the next progress report,
+        # where it cancels the call and is raised from it.
+        delay = 0.05
+        timer = threading.Timer(delay, _thread.interrupt_main)
+        start = time.monotonic()
+        timer.start()
+        try:
+            s.fuse()
+        except KeyboardInterrupt as e:
+            assert isinstance(e.__cause__, toothfuse.ToothfuseError)
+            assert e.__cause__.status == toothfuse.STATUS_CANCELLED
+            with pytest.raises(toothfuse.ToothfuseError):
+                s.fused_teeth()  # nothing fused: the session holds what it held before
+            return
+        finally:
+            timer.cancel()
+        # The interrupt can only be missed by a call that ended before it was sent.
+        assert time.monotonic() - start < delay + 0.01
+        pytest.skip("the fuse ended before the interrupt")

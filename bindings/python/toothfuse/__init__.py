@@ -23,6 +23,7 @@ from ._core import (
     SOURCE_BAND,
     SOURCE_CBCT,
     SOURCE_IOS,
+    STATUS_CANCELLED,
     STATUS_MIRRORED,
     STATUS_REGISTRATION_REJECTED,
     STATUS_UNIT_MISMATCH,
@@ -39,7 +40,7 @@ from ._files import MeshFile, read_mesh
 
 __all__ = [
     "ABI_VERSION", "CBCT", "IOS", "LIBRARY_PATH", "SOURCE_BAND", "SOURCE_CBCT", "SOURCE_IOS",
-    "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED", "STATUS_UNIT_MISMATCH",
+    "STATUS_CANCELLED", "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED", "STATUS_UNIT_MISMATCH",
     "FusedJaw", "MeshFile", "Session", "ToothfuseError", "abi_version", "fuse", "is_fdi",
     "merge_meshes", "read_mesh", "version",
 ]

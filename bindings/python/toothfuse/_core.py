@@ -26,11 +26,13 @@ import array
 import ctypes
 import json
 import os
+import signal
+import threading
 
 __all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "merge_meshes", "is_fdi", "IOS",
            "CBCT", "version",
            "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT", "STATUS_UNIT_MISMATCH",
-           "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED"]
+           "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED", "STATUS_CANCELLED"]
 
 IOS = 0
 CBCT = 1
@@ -40,6 +42,8 @@ SOURCE_CBCT = 2
 STATUS_UNIT_MISMATCH = 6
 STATUS_MIRRORED = 14
 STATUS_REGISTRATION_REJECTED = 15
+STATUS_CANCELLED = 16
+_STAGES = {1: "register", 2: "cut", 3: "stitch"}
 _PRESETS = {"paper": 0, "default": 1}
 _FRAMES = {"cbct": 0, "ios": 1}
 _TRANSFORMS = {"cbct_to_output": 0, "ios_to_output": 1, "cbct_to_ios": 2}
@@ -150,6 +154,9 @@ _add_volume = _fn("toothfuse_session_add_label_volume", _st, _S, _size_p, _d_p, 
                   ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint32, _size_p)
 _set_repair = _fn("toothfuse_session_set_ios_repair", _st, _S, ctypes.c_bool, ctypes.c_double)
 _set_threads = _fn("toothfuse_session_set_max_threads", _st, _S, ctypes.c_uint32)
+_PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_uint32, ctypes.c_size_t,
+                                ctypes.c_size_t)
+_set_progress = _fn("toothfuse_session_set_progress", _st, _S, _PROGRESS_FN, ctypes.c_void_p)
 _remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
 _count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
 _list = _fn("toothfuse_session_list_teeth", _st, _S, ctypes.c_uint32, _i32_p, ctypes.c_size_t,
@@ -291,6 +298,10 @@ class Session:
         st = _new(ctypes.byref(self._h))
         if st != _OK:
             raise ToothfuseError(st, "")
+        # The progress callback (None: none), the exception it raised during the last call, and
+        # whether Ctrl-C was pressed during it.
+        self._progress = [None, None, False]
+        self._trampoline = _PROGRESS_FN(_trampoline_of(self._progress))
 
     def close(self):
         """Frees the session (also done by `with` and on garbage collection)."""
@@ -310,6 +321,37 @@ class Session:
     def _check(self, st):
         if st != _OK:
             raise ToothfuseError(st, _last_error(self._h).decode())
+
+    def _long_call(self, fn, options):
+        """Runs register/fuse/cut/stitch `fn` with the progress callback, and with Ctrl-C
+        cancelling it: on the main thread, while Python's own SIGINT handler is in place, the
+        call runs under a handler that only notes the interrupt (raised at the next progress
+        report, a KeyboardInterrupt would be lost in the C callback); the callback then cancels
+        the call and the KeyboardInterrupt is raised from it. Other handlers (a host's) are left
+        alone."""
+        progress = self._progress
+        progress[1:] = [None, False]
+        previous = None
+        if (threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+            previous = signal.signal(signal.SIGINT, lambda *_: progress.__setitem__(2, True))
+        try:
+            watched = progress[0] is not None or previous is not None
+            self._check(_set_progress(self._h, self._trampoline if watched else None, None))
+            st = fn(self._h, ctypes.byref(options))
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
+        raised = progress[1] if progress[1] is not None else (
+            KeyboardInterrupt() if progress[2] else None)
+        progress[1:] = [None, False]
+        if st != _OK:
+            error = ToothfuseError(st, _last_error(self._h).decode())
+            if raised is not None:
+                raise raised from error
+            raise error
+        if raised is not None:  # after the call's last report: the work was done
+            raise raised
 
     def add_tooth(self, modality, fdi, vertices, triangles):
         """Adds or replaces one tooth (IOS crown: manifold, open; CBCT: closed, manifold)."""
@@ -406,6 +448,19 @@ class Session:
             raise ValueError(f"max_threads {n} is not in [0, 2**32)")
         self._check(_set_threads(self._h, int(n)))
 
+    def set_progress(self, callback):
+        """Calls callback(stage, done, total) during this session's register, fuse,
+        fuse_registered, cut and stitch: `done` of `total` units of `stage` ("register", "cut"
+        or "stitch") are finished. It runs on the calling thread. A truthy return value cancels
+        the call, which raises ToothfuseError with status STATUS_CANCELLED; an exception raised
+        by the callback cancels it too and is raised again from the call. The session keeps its
+        earlier results either way. None removes the callback. Without one, Ctrl-C
+        (KeyboardInterrupt) still cancels a running call the same way. The results are the same
+        bit for bit with or without a callback."""
+        if callback is not None and not callable(callback):
+            raise TypeError(f"progress callback {callback!r} is not callable")
+        self._progress[0] = callback
+
     def remove_tooth(self, modality, fdi):
         """Removes a held tooth."""
         self._check(_remove(self._h, modality, fdi))
@@ -455,34 +510,33 @@ class Session:
     def register(self, preset="default", frame="cbct", accept_questionable=False):
         """Registers the held CBCT teeth to the held IOS crowns; returns the registered FDI
         numbers. preset: "default" or "paper"; frame: "cbct" or "ios" (the output frame)."""
-        self._check(_register(self._h, ctypes.byref(
-            _options(preset, frame, accept_questionable))))
+        self._long_call(_register, _options(preset, frame, accept_questionable))
         return self._fdi_list(_registered)
 
     def fuse(self, preset="default", frame="cbct", accept_questionable=False):
         """Register + cut + stitch in one call (registers anew); returns the fused FDI numbers.
         Teeth whose fusion failed are listed by `skipped()`."""
-        self._check(_fuse(self._h, ctypes.byref(_options(preset, frame, accept_questionable))))
+        self._long_call(_fuse, _options(preset, frame, accept_questionable))
         return self._fdi_list(_fused_teeth)
 
     def fuse_registered(self, preset="default"):
         """Cut + stitch with the last registration (no new registration; the output frame is
         the registration's; only the fusion settings of `preset` are used); returns the fused
         FDI numbers."""
-        self._check(_fuse_registered(self._h, ctypes.byref(_options(preset, "cbct"))))
+        self._long_call(_fuse_registered, _options(preset, "cbct"))
         return self._fdi_list(_fused_teeth)
 
     def cut(self, preset="default"):
         """Crown removal with the last registration (the first fusion stage); returns the cut
         FDI numbers. The cut is kept for `stitch` until the teeth change or a new register or
         fuse; read it with `cut_root`."""
-        self._check(_cut(self._h, ctypes.byref(_options(preset, "cbct"))))
+        self._long_call(_cut, _options(preset, "cbct"))
         return self._fdi_list(_cut_teeth)
 
     def stitch(self, preset="default"):
         """Stitching of the held cut (the second fusion stage); returns the fused FDI numbers,
         read with `fused_mesh`. Same meshes as `fuse_registered`, bit for bit."""
-        self._check(_stitch(self._h, ctypes.byref(_options(preset, "cbct"))))
+        self._long_call(_stitch, _options(preset, "cbct"))
         return self._fdi_list(_fused_teeth)
 
     def cut_teeth(self):
@@ -619,6 +673,25 @@ class Session:
         return d
 
 
+def _trampoline_of(progress):
+    """The C callback of a session: cancels once Ctrl-C was noted (progress[2]), else calls
+    progress[0] (if set) and, when it raises, keeps the exception in progress[1] and cancels the
+    call (`Session._long_call` raises it again)."""
+
+    def trampoline(_user_data, stage, done, total):
+        if progress[2]:
+            return 1
+        try:
+            callback = progress[0]
+            return 1 if callback is not None and callback(_STAGES.get(stage, str(stage)),
+                                                           done, total) else 0
+        except BaseException as e:  # noqa: BLE001 - raised again from the call
+            progress[1] = e
+            return 1
+
+    return trampoline
+
+
 def _options(preset, frame, accept_questionable=False):
     o = _Options()
     st = _opts_default(ctypes.byref(o))
@@ -698,7 +771,7 @@ class FusedJaw:
 def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles, cbct_labels,
          *, ios_per_face=False, cbct_per_face=False, preset="default", frame="cbct",
          ios_repair=False, max_hole_fraction=0.5, as_numpy=None, accept_questionable=False,
-         max_threads=0):
+         max_threads=0, progress=None):
     """One call: a labeled IOS jaw (FDI per vertex, or per face with ios_per_face; 0 =
     gingiva) and labeled CBCT teeth (one mesh with FDI labels; every tooth closed) -> FusedJaw.
     ios_repair repairs real-scan crowns on entry. Results are numpy arrays when as_numpy is
@@ -709,9 +782,11 @@ def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles,
     jaw, shifted labels). accept_questionable=True registers such data anyway; the result's
     `questionable` is then True and report["questionable_findings"] names the findings.
     max_threads caps the threads the call uses (0: no cap; 1: all on the calling thread); the
-    results are the same whatever it is."""
+    results are the same whatever it is. progress: a callback(stage, done, total) as
+    Session.set_progress takes it (a truthy return cancels: ToothfuseError, STATUS_CANCELLED)."""
     with Session() as s:
         s.set_max_threads(max_threads)
+        s.set_progress(progress)
         if ios_repair:
             s.set_ios_repair(True, max_hole_fraction)
         s.add_jaw(IOS, ios_vertices, ios_triangles, ios_labels, per_face=ios_per_face)
