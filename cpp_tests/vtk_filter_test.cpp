@@ -357,12 +357,12 @@ TEST(VtkToothfuseFilter, ReportsProgressAndAbortsFromAnObserver) {
   EXPECT_TRUE(std::is_sorted(w.seen.begin(), w.seen.end())) << ::testing::PrintToString(w.seen);
   EXPECT_EQ(w.seen.back(), 1.0);
   EXPECT_TRUE(std::any_of(w.seen.begin(), w.seen.end(),
-                          [](double p) { return p > 0.3 && p < 1.0; }))
+                          [](double p) { return p > 0.35 && p < 1.0; }))
       << "no report within the stitching";
 
   // Aborted within the stitching.
   w.seen.clear();
-  w.abortAt = 0.3;
+  w.abortAt = 0.4;
   f->Modified();
   f->Update();
   EXPECT_TRUE(errors.messages.empty()) << errors.messages.front();

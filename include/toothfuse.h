@@ -577,6 +577,13 @@ typedef uint32_t toothfuse_volume_scheme;
 #define TOOTHFUSE_STAGE_STITCH 3
 
 /**
+ * Surfacing the teeth of a CBCT label volume (`toothfuse_session_add_label_volume`): the tooth
+ * labels surfaced (a per-jaw teeth mask is first split with the IOS crowns: a cancel during the
+ * split is answered when the split ends).
+ */
+#define TOOTHFUSE_STAGE_SURFACE 4
+
+/**
  * The paper's method, faithfully (CA, CR, FR over tooth triples; its cut and stitch).
  */
 #define TOOTHFUSE_PRESET_PAPER 0
@@ -1023,7 +1030,7 @@ toothfuse_status toothfuse_session_mesh_info(const struct toothfuse_session *ses
 
 /**
  * Sets the progress callback of this session's long calls (`_register`, `_fuse`,
- * `_fuse_registered`, `_cut`, `_stitch`), with `user_data` passed back to it unchanged; a NULL
+ * `_fuse_registered`, `_cut`, `_stitch`, `_add_label_volume`), with `user_data` passed back to it unchanged; a NULL
  * `callback` removes it. See `toothfuse_progress_fn` for when it is called and how a cancel
  * works. The results are the same bit for bit with or without a callback. The session does not
  * own `user_data`: it must stay valid while the callback is set. Other sessions are not

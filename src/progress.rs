@@ -1,4 +1,5 @@
-//! Progress reports and cancellation of a long call (registration, crown cut, stitching), for
+//! Progress reports and cancellation of a long call (registration, crown cut, stitching, label
+//! volume surfacing), for
 //! hosts that run the fusion in an interactive session: a progress bar, and a way to abandon a
 //! run whose options the user has already changed.
 //!
@@ -29,6 +30,10 @@ pub enum Stage {
     Cut,
     /// Stitching: the teeth stitched.
     Stitch,
+    /// Surfacing a CBCT label volume's teeth (adding a label volume): the tooth labels
+    /// surfaced. A per-jaw teeth mask is first split with the IOS crowns, which is checked for a
+    /// cancel when it ends.
+    Surface,
 }
 
 impl Stage {
@@ -38,6 +43,7 @@ impl Stage {
             Stage::Register => "register",
             Stage::Cut => "cut",
             Stage::Stitch => "stitch",
+            Stage::Surface => "surface",
         }
     }
 }

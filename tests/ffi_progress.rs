@@ -269,3 +269,72 @@ fn a_cancel_in_any_stage_returns_cancelled_and_keeps_the_earlier_results() {
         (&again.0, &again.1, &again.3)
     );
 }
+
+/// A ball of radius 2.5 mm labelled 11 centred in a 24³ grid of 0.25 mm voxels (i fastest).
+fn ball_volume() -> Vec<u8> {
+    const N: usize = 24;
+    let mut v = vec![0u8; N * N * N];
+    for k in 0..N {
+        for j in 0..N {
+            for i in 0..N {
+                let c = |x: usize| (x as f64 - 11.5) * 0.25;
+                if c(i).powi(2) + c(j).powi(2) + c(k).powi(2) < 6.25 {
+                    v[i + N * (j + N * k)] = 11;
+                }
+            }
+        }
+    }
+    v
+}
+
+/// Adds the ball volume; returns the status and the teeth added.
+fn add_ball(s: &Session, labels: &[u8]) -> (toothfuse_status, usize) {
+    let (dims, sp, or) = ([24usize; 3], [0.25; 3], [0.0; 3]);
+    let mut added = 0usize;
+    // SAFETY: every buffer holds what it announces.
+    let st = unsafe {
+        toothfuse_session_add_label_volume(
+            s.0,
+            dims.as_ptr(),
+            ptr::null(),
+            sp.as_ptr(),
+            or.as_ptr(),
+            labels.as_ptr().cast(),
+            labels.len(),
+            TOOTHFUSE_LABEL_TYPE_UINT8,
+            TOOTHFUSE_VOLUME_SCHEME_FDI,
+            &mut added,
+        )
+    };
+    (st, added)
+}
+
+#[test]
+fn a_label_volume_reports_its_surfacing_and_a_cancel_adds_nothing() {
+    let labels = ball_volume();
+    let s = Session::new();
+    let mut log = Log {
+        stop_at: Some((TOOTHFUSE_STAGE_SURFACE, 0)),
+        seen: Vec::new(),
+    };
+    set(&s, Some(&mut log));
+    let (st, added) = add_ball(&s, &labels);
+    assert_eq!(st, toothfuse_status::Cancelled, "{}", s.error());
+    assert!(s.error().contains("surface"), "{}", s.error());
+    assert_eq!(added, 0);
+    assert!(s.teeth(TOOTHFUSE_MODALITY_CBCT).is_empty());
+    let mut log = Log {
+        stop_at: None,
+        seen: Vec::new(),
+    };
+    set(&s, Some(&mut log));
+    let (st, added) = add_ball(&s, &labels);
+    set(&s, None);
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    assert_eq!(added, 1);
+    assert_eq!(s.teeth(TOOTHFUSE_MODALITY_CBCT), vec![11]);
+    let reports: Vec<(toothfuse_stage, usize, usize)> =
+        log.seen.iter().map(|r| (r.0, r.1, r.2)).collect();
+    assert_eq!(reports.first(), Some(&(TOOTHFUSE_STAGE_SURFACE, 0, 1)));
+    assert_eq!(reports.last(), Some(&(TOOTHFUSE_STAGE_SURFACE, 1, 1)));
+}

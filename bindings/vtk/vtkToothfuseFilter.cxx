@@ -46,14 +46,18 @@ struct SessionFree {
 };
 using SessionPtr = std::unique_ptr<toothfuse_session, SessionFree>;
 
-/// The session's progress callback: the filter's progress (registration 0-0.2, crown cut
-/// 0.2-0.3, stitching 0.3-1) through UpdateProgress, and its AbortExecute flag as the cancel.
+/// The session's progress callback: the filter's progress (a label image's surfacing 0-0.1,
+/// registration 0.1-0.25, crown cut 0.25-0.35, stitching 0.35-1) through UpdateProgress, and its
+/// AbortExecute flag as the cancel.
 int32_t ReportProgress(void* filter, toothfuse_stage stage, size_t done, size_t total) {
-  // Stage k spans [bound[k - 1], bound[k]]; each stage's end is exactly the next one's start,
-  // so the reports never decrease.
-  static const double bound[] = {0.0, 0.2, 0.3, 1.0};
-  const size_t k = stage >= 1 && stage <= TOOTHFUSE_STAGE_STITCH ? stage : 1;
-  const double a = bound[k - 1], b = bound[k];
+  // Each stage spans [bound[k], bound[k + 1]] in the order surface, register, cut, stitch; a
+  // stage's end is exactly the next one's start, so the reports never decrease.
+  static const double bound[] = {0.0, 0.1, 0.25, 0.35, 1.0};
+  size_t k = 0;  // surfacing, and any stage this build does not know
+  if (stage == TOOTHFUSE_STAGE_REGISTER) k = 1;
+  if (stage == TOOTHFUSE_STAGE_CUT) k = 2;
+  if (stage == TOOTHFUSE_STAGE_STITCH) k = 3;
+  const double a = bound[k], b = bound[k + 1];
   const double within = total > 0 ? double(done) / double(total) : 0.0;
   auto* f = static_cast<vtkToothfuseFilter*>(filter);
   try {
@@ -364,6 +368,12 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
 
   st = toothfuse_session_set_max_threads(s, static_cast<uint32_t>(this->MaxThreads));
   if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_max_threads");
+  // Aborted (SetAbortExecute): an empty output, no error, the status kept.
+  auto cancelled = [&]() {
+    this->LastStatus = static_cast<int>(st);
+    vtkDebugMacro(<< "fusion cancelled: " << toothfuse_session_last_error(s));
+    return 1;
+  };
   st = toothfuse_session_set_progress(s, ReportProgress, this);
   if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_set_progress");
   if (this->IOSRepair) {
@@ -385,6 +395,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
     st = toothfuse_session_add_label_volume(
         s, volume.dims, volume.voxelToWorld, nullptr, nullptr, volume.labels, volume.count,
         volume.type, static_cast<toothfuse_volume_scheme>(this->VolumeScheme), nullptr);
+    if (st == TOOTHFUSE_STATUS_CANCELLED) return cancelled();
     if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_add_label_volume (CBCT)");
   }
 
@@ -395,12 +406,7 @@ int vtkToothfuseFilter::RequestData(vtkInformation*, vtkInformationVector** inpu
   options.frame = static_cast<toothfuse_frame>(this->Frame);
   options.accept_questionable = this->AcceptQuestionable ? 1u : 0u;
   st = toothfuse_session_fuse(s, &options);
-  if (st == TOOTHFUSE_STATUS_CANCELLED) {
-    // Aborted (SetAbortExecute): an empty output, no error, the status kept.
-    this->LastStatus = static_cast<int>(st);
-    vtkDebugMacro(<< "fusion cancelled: " << toothfuse_session_last_error(s));
-    return 1;
-  }
+  if (st == TOOTHFUSE_STATUS_CANCELLED) return cancelled();
   if (st != TOOTHFUSE_STATUS_OK) return failed("toothfuse_session_fuse");
 
   // Results: fused and skipped teeth, report JSON.

@@ -130,9 +130,10 @@ class vtkToothfuseFilter : public vtkPolyDataAlgorithm {
   vtkSetClampMacro(MaxThreads, int, 0, 1 << 20);
   vtkGetMacro(MaxThreads, int);
 
-  /// Progress and abort: an update reports the fusion's progress as ProgressEvent (the
-  /// registration 0-0.2, the crown cut 0.2-0.3, the stitching 0.3-1; on the updating thread,
-  /// between teeth and band builds), and SetAbortExecute(1), from a ProgressEvent observer or
+  /// Progress and abort: an update reports the fusion's progress as ProgressEvent (a label
+  /// image's surfacing 0-0.1, the registration 0.1-0.25, the crown cut 0.25-0.35, the stitching
+  /// 0.35-1; on the updating thread, between teeth and band builds), and SetAbortExecute(1),
+  /// from a ProgressEvent observer or
   /// another thread, cancels it within about one band build: the output is then empty, no error
   /// is raised and GetLastStatus() is TOOTHFUSE_STATUS_CANCELLED. The output does not depend on
   /// the observers.

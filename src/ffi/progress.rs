@@ -18,6 +18,10 @@ pub const TOOTHFUSE_STAGE_REGISTER: toothfuse_stage = 1;
 pub const TOOTHFUSE_STAGE_CUT: toothfuse_stage = 2;
 /// Stitching: the teeth stitched.
 pub const TOOTHFUSE_STAGE_STITCH: toothfuse_stage = 3;
+/// Surfacing the teeth of a CBCT label volume (`toothfuse_session_add_label_volume`): the tooth
+/// labels surfaced (a per-jaw teeth mask is first split with the IOS crowns: a cancel during the
+/// split is answered when the split ends).
+pub const TOOTHFUSE_STAGE_SURFACE: toothfuse_stage = 4;
 
 /// The progress callback: `done` of `total` units of `stage` (a `TOOTHFUSE_STAGE_*` value) are
 /// finished. Return 0 to go on, any other value to cancel the call, which then returns
@@ -53,6 +57,7 @@ fn stage_value(stage: Stage) -> toothfuse_stage {
         Stage::Register => TOOTHFUSE_STAGE_REGISTER,
         Stage::Cut => TOOTHFUSE_STAGE_CUT,
         Stage::Stitch => TOOTHFUSE_STAGE_STITCH,
+        Stage::Surface => TOOTHFUSE_STAGE_SURFACE,
     }
 }
 
@@ -75,7 +80,7 @@ pub(super) fn with_hook<R>(hook: Option<Hook>, f: impl FnOnce() -> R) -> R {
 }
 
 /// Sets the progress callback of this session's long calls (`_register`, `_fuse`,
-/// `_fuse_registered`, `_cut`, `_stitch`), with `user_data` passed back to it unchanged; a NULL
+/// `_fuse_registered`, `_cut`, `_stitch`, `_add_label_volume`), with `user_data` passed back to it unchanged; a NULL
 /// `callback` removes it. See `toothfuse_progress_fn` for when it is called and how a cancel
 /// works. The results are the same bit for bit with or without a callback. The session does not
 /// own `user_data`: it must stay valid while the callback is set. Other sessions are not

@@ -68,6 +68,7 @@ impl Session {
             ));
         }
         let split = split_teeth(vol, &crowns, &SplitOptions::default())?;
+        crate::progress::check(crate::progress::Stage::Surface)?;
         let mut surfaced = surface_teeth(&split.volume, VolumeScheme::Fdi, opts)?;
         let mut notes = BTreeMap::new();
         for j in &split.jaws {

@@ -53,7 +53,9 @@ pub struct SurfacedTeeth {
 
 /// Surfaces every tooth label of a per-tooth volume (`scheme` gives the FDI numbers). Errors
 /// name a label the scheme does not know, two labels with one FDI number, or a volume without
-/// tooth labels; a DentalSegmentator volume (one teeth label per jaw) is refused here.
+/// tooth labels; a DentalSegmentator volume (one teeth label per jaw) is refused here. Under a
+/// progress callback ([`crate::progress::with_progress`]) each label surfaced is a unit of
+/// [`crate::progress::Stage::Surface`], and a cancel returns [`crate::Error::Cancelled`].
 pub fn surface_teeth(
     vol: &LabelVolume,
     scheme: VolumeScheme,
@@ -111,10 +113,17 @@ pub fn surface_teeth(
             labels.len()
         )));
     }
+    use crate::progress::{Stage, advance, check, ended, start};
+    start(Stage::Surface, work.len());
     let meshes = crate::par::map_ordered(&work, |&(_, label, _)| {
         let (lo, hi) = boxes[&label];
-        surface_box(vol, lo, hi, opts.smoothing_passes, |l| l == label)
+        let mesh = check(Stage::Surface)
+            .and_then(|()| surface_box(vol, lo, hi, opts.smoothing_passes, |l| l == label));
+        advance();
+        mesh
     });
+    ended();
+    check(Stage::Surface)?;
     for ((fdi, label, count), mesh) in work.into_iter().zip(meshes) {
         let (lo, hi) = boxes[&label];
         let touches_border = (0..3).any(|a| lo[a] == 0 || hi[a] + 1 == vol.dims[a]);

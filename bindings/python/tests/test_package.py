@@ -313,3 +313,19 @@ def test_ctrl_c_cancels_a_running_fuse_without_a_callback():
         # The interrupt can only be missed by a call that ended before it was sent.
         assert time.monotonic() - start < delay + 0.01
         pytest.skip("the fuse ended before the interrupt")
+
+
+def test_a_label_volume_reports_its_surfacing_and_a_cancel_adds_nothing():
+    ii, jj, kk = np.indices((24, 24, 30))
+    labels = np.zeros((24, 24, 30), dtype=np.uint8)
+    labels[(ii - 11.5) ** 2 + (jj - 12) ** 2 + 0.5 * (kk - 15) ** 2 < 40] = 11
+    with toothfuse.Session() as s:
+        s.set_progress(lambda stage, done, total: stage == "surface")
+        with pytest.raises(toothfuse.ToothfuseError) as e:
+            s.add_label_volume(labels, spacing=(0.4, 0.4, 0.4), origin=(0, 0, 0))
+        assert e.value.status == toothfuse.STATUS_CANCELLED
+        assert s.teeth(toothfuse.CBCT) == []
+        seen = []
+        s.set_progress(lambda *r: seen.append(r))
+        assert s.add_label_volume(labels, spacing=(0.4, 0.4, 0.4), origin=(0, 0, 0)) == 1
+        assert seen[0] == ("surface", 0, 1) and seen[-1] == ("surface", 1, 1)

@@ -43,7 +43,7 @@ STATUS_UNIT_MISMATCH = 6
 STATUS_MIRRORED = 14
 STATUS_REGISTRATION_REJECTED = 15
 STATUS_CANCELLED = 16
-_STAGES = {1: "register", 2: "cut", 3: "stitch"}
+_STAGES = {1: "register", 2: "cut", 3: "stitch", 4: "surface"}
 _PRESETS = {"paper": 0, "default": 1}
 _FRAMES = {"cbct": 0, "ios": 1}
 _TRANSFORMS = {"cbct_to_output": 0, "ios_to_output": 1, "cbct_to_ios": 2}
@@ -322,8 +322,9 @@ class Session:
         if st != _OK:
             raise ToothfuseError(st, _last_error(self._h).decode())
 
-    def _long_call(self, fn, options):
-        """Runs register/fuse/cut/stitch `fn` with the progress callback, and with Ctrl-C
+    def _long_call(self, fn, *args):
+        """Runs register/fuse/cut/stitch/add_label_volume `fn` on this session with `args`,
+        with the progress callback, and with Ctrl-C
         cancelling it: on the main thread, while Python's own SIGINT handler is in place, the
         call runs under a handler that only notes the interrupt (raised at the next progress
         report, a KeyboardInterrupt would be lost in the C callback); the callback then cancels
@@ -338,7 +339,7 @@ class Session:
         try:
             watched = progress[0] is not None or previous is not None
             self._check(_set_progress(self._h, self._trampoline if watched else None, None))
-            st = fn(self._h, ctypes.byref(options))
+            st = fn(self._h, *args)
         finally:
             if previous is not None:
                 signal.signal(signal.SIGINT, previous)
@@ -432,8 +433,8 @@ class Session:
             org = (ctypes.c_double * 3)(*[float(x) for x in origin])
         added = ctypes.c_size_t()
         cast = lambda a: ctypes.cast(a, _d_p) if a is not None else None
-        self._check(_add_volume(self._h, ctypes.cast(d, _size_p), cast(m), cast(sp), cast(org),
-                                ptr, count, ltype, schemes[scheme], ctypes.byref(added)))
+        self._long_call(_add_volume, ctypes.cast(d, _size_p), cast(m), cast(sp), cast(org), ptr,
+                        count, ltype, schemes[scheme], ctypes.byref(added))
         del keep
         return added.value
 
@@ -450,8 +451,8 @@ class Session:
 
     def set_progress(self, callback):
         """Calls callback(stage, done, total) during this session's register, fuse,
-        fuse_registered, cut and stitch: `done` of `total` units of `stage` ("register", "cut"
-        or "stitch") are finished. It runs on the calling thread. A truthy return value cancels
+        fuse_registered, cut, stitch and add_label_volume: `done` of `total` units of `stage`
+        ("register", "cut", "stitch" or "surface") are finished. It runs on the calling thread. A truthy return value cancels
         the call, which raises ToothfuseError with status STATUS_CANCELLED; an exception raised
         by the callback cancels it too and is raised again from the call. The session keeps its
         earlier results either way. None removes the callback. Without one, Ctrl-C
@@ -510,33 +511,33 @@ class Session:
     def register(self, preset="default", frame="cbct", accept_questionable=False):
         """Registers the held CBCT teeth to the held IOS crowns; returns the registered FDI
         numbers. preset: "default" or "paper"; frame: "cbct" or "ios" (the output frame)."""
-        self._long_call(_register, _options(preset, frame, accept_questionable))
+        self._long_call(_register, ctypes.byref(_options(preset, frame, accept_questionable)))
         return self._fdi_list(_registered)
 
     def fuse(self, preset="default", frame="cbct", accept_questionable=False):
         """Register + cut + stitch in one call (registers anew); returns the fused FDI numbers.
         Teeth whose fusion failed are listed by `skipped()`."""
-        self._long_call(_fuse, _options(preset, frame, accept_questionable))
+        self._long_call(_fuse, ctypes.byref(_options(preset, frame, accept_questionable)))
         return self._fdi_list(_fused_teeth)
 
     def fuse_registered(self, preset="default"):
         """Cut + stitch with the last registration (no new registration; the output frame is
         the registration's; only the fusion settings of `preset` are used); returns the fused
         FDI numbers."""
-        self._long_call(_fuse_registered, _options(preset, "cbct"))
+        self._long_call(_fuse_registered, ctypes.byref(_options(preset, "cbct")))
         return self._fdi_list(_fused_teeth)
 
     def cut(self, preset="default"):
         """Crown removal with the last registration (the first fusion stage); returns the cut
         FDI numbers. The cut is kept for `stitch` until the teeth change or a new register or
         fuse; read it with `cut_root`."""
-        self._long_call(_cut, _options(preset, "cbct"))
+        self._long_call(_cut, ctypes.byref(_options(preset, "cbct")))
         return self._fdi_list(_cut_teeth)
 
     def stitch(self, preset="default"):
         """Stitching of the held cut (the second fusion stage); returns the fused FDI numbers,
         read with `fused_mesh`. Same meshes as `fuse_registered`, bit for bit."""
-        self._long_call(_stitch, _options(preset, "cbct"))
+        self._long_call(_stitch, ctypes.byref(_options(preset, "cbct")))
         return self._fdi_list(_fused_teeth)
 
     def cut_teeth(self):
