@@ -1,7 +1,6 @@
 //! Progress reports and cancellation of a long call (registration, crown cut, stitching, label
-//! volume surfacing), for
-//! hosts that run the fusion in an interactive session: a progress bar, and a way to abandon a
-//! run whose options the user has already changed.
+//! volume surfacing), for hosts that run the fusion in an interactive session: a progress bar,
+//! and a way to abandon a run whose options the user has already changed.
 //!
 //! [`with_progress`] installs a callback on the calling thread for the duration of a closure.
 //! The library's stages report to it ([`Progress`]: the stage, the units done and their total)
@@ -37,7 +36,7 @@ pub enum Stage {
 }
 
 impl Stage {
-    /// Lower-case name (`register`, `cut`, `stitch`).
+    /// Lower-case name (`register`, `cut`, `stitch`, `surface`).
     pub fn name(self) -> &'static str {
         match self {
             Stage::Register => "register",

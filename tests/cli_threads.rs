@@ -59,9 +59,9 @@ fn files(d: &Path) -> Vec<(String, Vec<u8>)> {
     out
 }
 
-#[test]
-fn one_thread_runs_alone_and_writes_the_same_files() {
-    let d = tmp("threads");
+/// Writes the demo jaw of these tests (seed 6, a partial arch) into `d/demo`; returns its IOS
+/// and CBCT files.
+fn demo_jaw(d: &Path) -> (PathBuf, PathBuf) {
     let demo = d.join("demo");
     let (ok, _) = run_watching_threads(&[
         "demo",
@@ -73,7 +73,13 @@ fn one_thread_runs_alone_and_writes_the_same_files() {
         demo.to_str().unwrap(),
     ]);
     assert!(ok, "demo");
-    let (ios, cbct) = (demo.join("ios.ply"), demo.join("cbct.ply"));
+    (demo.join("ios.ply"), demo.join("cbct.ply"))
+}
+
+#[test]
+fn one_thread_runs_alone_and_writes_the_same_files() {
+    let d = tmp("threads");
+    let (ios, cbct) = demo_jaw(&d);
     let fuse = |out: &Path, threads: &str| {
         run_watching_threads(&[
             "--threads",
@@ -121,7 +127,6 @@ fn one_thread_runs_alone_and_writes_the_same_files() {
 #[test]
 fn progress_lines_come_in_stage_order_and_change_no_file() {
     let d = tmp("progress");
-    let demo = d.join("demo");
     let bin = env!("CARGO_BIN_EXE_toothfuse");
     let out = |args: &[&str]| {
         let o = Command::new(bin)
@@ -135,17 +140,7 @@ fn progress_lines_come_in_stage_order_and_change_no_file() {
         );
         String::from_utf8(o.stderr).unwrap()
     };
-    let demo_s = demo.to_str().unwrap();
-    out(&[
-        "demo",
-        "--seed",
-        "6",
-        "--variant",
-        "partial",
-        "--out",
-        demo_s,
-    ]);
-    let (ios, cbct) = (demo.join("ios.ply"), demo.join("cbct.ply"));
+    let (ios, cbct) = demo_jaw(&d);
     let (with, without) = (d.join("with"), d.join("without"));
     let fuse = |dir: &Path, extra: &[&str]| {
         let mut args = extra.to_vec();

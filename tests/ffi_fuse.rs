@@ -4,10 +4,9 @@
 
 mod ffi_common;
 
-use ffi_common::{Session, add_phantom, phantom};
+use ffi_common::{Session, add_phantom, phantom, report_json};
 use glam::DVec3;
 use std::collections::BTreeSet;
-use std::ffi::CStr;
 use std::ptr;
 use toothfuse::ffi::*;
 use toothfuse::{Rigid, TriMesh};
@@ -321,24 +320,6 @@ fn report_without_timing(s: &Session) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_str(&report_json(s)).unwrap();
     v["timing_ms"] = serde_json::Value::Null;
     v
-}
-
-/// The report JSON of the last fuse (size query, then copy).
-fn report_json(s: &Session) -> String {
-    let mut len = 0usize;
-    // SAFETY: live session; size query then copy.
-    unsafe {
-        assert_eq!(
-            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
-            toothfuse_status::Ok
-        );
-        let mut buf = vec![0 as std::ffi::c_char; len + 1];
-        assert_eq!(
-            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
-            toothfuse_status::Ok
-        );
-        CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned()
-    }
 }
 
 /// A session capped at one thread (everything on the caller's thread) fuses what an uncapped

@@ -4,7 +4,7 @@
 
 mod ffi_common;
 
-use ffi_common::{Session, add_phantom, phantom};
+use ffi_common::{Session, add_phantom, fuse_default, fused_copy, phantom, report_json};
 use std::ffi::{CStr, c_void};
 use std::ptr;
 use std::thread::ThreadId;
@@ -43,67 +43,19 @@ fn set(s: &Session, log: Option<&mut Log>) {
 /// The whole fused jaw (positions as bits, indices), the report JSON and a registered
 /// transform: what a cancelled call must leave as it was.
 fn held(s: &Session) -> (Vec<u64>, Vec<u32>, String, Vec<u64>) {
-    let (mut nv, mut ni, mut len) = (0usize, 0usize, 0usize);
-    // SAFETY: live session; buffers sized from the size queries.
+    let (v, t) = fused_copy(s, 0);
+    let mut teeth = [0i32; 52];
+    let (mut n, mut m) = (0usize, [0f64; 16]);
+    // SAFETY: live session; room for 52 teeth and 16 doubles.
     unsafe {
-        assert_eq!(
-            toothfuse_session_fused_size(s.0, 0, &mut nv, &mut ni),
-            toothfuse_status::Ok,
-            "{}",
-            s.error()
-        );
-        let mut v = vec![0f64; 3 * nv];
-        let mut t = vec![0u32; ni];
-        assert_eq!(
-            toothfuse_session_copy_fused_vertices(
-                s.0,
-                0,
-                v.as_mut_ptr().cast(),
-                nv,
-                24,
-                TOOTHFUSE_SCALAR_FLOAT64
-            ),
-            toothfuse_status::Ok
-        );
-        assert_eq!(
-            toothfuse_session_copy_fused_indices(s.0, 0, t.as_mut_ptr(), ni),
-            toothfuse_status::Ok
-        );
-        assert_eq!(
-            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
-            toothfuse_status::Ok
-        );
-        let mut buf = vec![0 as std::ffi::c_char; len + 1];
-        assert_eq!(
-            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
-            toothfuse_status::Ok
-        );
-        let json = CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned();
-        let mut teeth = [0i32; 52];
-        let mut n = 0usize;
-        assert_eq!(
-            toothfuse_session_fused_teeth(s.0, teeth.as_mut_ptr(), 52, &mut n),
-            toothfuse_status::Ok
-        );
-        let mut m = [0f64; 16];
-        assert_eq!(
-            toothfuse_session_transform(
-                s.0,
-                teeth[0],
-                TOOTHFUSE_TRANSFORM_CBCT_TO_OUTPUT,
-                m.as_mut_ptr()
-            ),
-            toothfuse_status::Ok,
-            "{}",
-            s.error()
-        );
-        (
-            v.iter().map(|x| x.to_bits()).collect(),
-            t,
-            json,
-            m.iter().map(|x| x.to_bits()).collect(),
-        )
+        let st = toothfuse_session_fused_teeth(s.0, teeth.as_mut_ptr(), 52, &mut n);
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        let which = TOOTHFUSE_TRANSFORM_CBCT_TO_OUTPUT;
+        let st = toothfuse_session_transform(s.0, teeth[0], which, m.as_mut_ptr());
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
     }
+    let bits = |x: &[f64]| x.iter().map(|x| x.to_bits()).collect();
+    (bits(&v), t, report_json(s), bits(&m))
 }
 
 /// The report JSON with its timings left out.
@@ -142,9 +94,7 @@ fn reports_come_in_stage_order_on_the_calling_thread_and_change_nothing() {
     set(&watched, Some(&mut log));
     for s in [&plain, &watched] {
         add_phantom(s, &p);
-        // SAFETY: live session, NULL options = defaults.
-        let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
-        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        fuse_default(s);
     }
     let (a, b) = (held(&plain), held(&watched));
     assert_eq!((&a.0, &a.1, &a.3), (&b.0, &b.1, &b.3));
@@ -175,9 +125,7 @@ fn a_cancel_in_any_stage_returns_cancelled_and_keeps_the_earlier_results() {
     let p = phantom(5);
     let s = Session::new();
     add_phantom(&s, &p);
-    // SAFETY: live session, NULL options = defaults.
-    let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
-    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    fuse_default(&s);
     let before = held(&s);
     type Call =
         unsafe extern "C" fn(*mut toothfuse_session, *const toothfuse_options) -> toothfuse_status;
@@ -260,9 +208,7 @@ fn a_cancel_in_any_stage_returns_cancelled_and_keeps_the_earlier_results() {
         assert_eq!(before.2, after.2, "stage {stage}: report");
     }
     // The session still works, without the callback.
-    // SAFETY: live session, NULL options = defaults.
-    let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
-    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    fuse_default(&s);
     let again = held(&s);
     assert_eq!(
         (&before.0, &before.1, &before.3),

@@ -84,7 +84,7 @@ pub fn cut_jaw(
     opts: &FuseOptions,
 ) -> Result<CutJaw> {
     let cut = cut_crowns(&ios_crowns(ios)?, cbct, transforms, opts);
-    crate::progress::check(crate::progress::Stage::Cut)?;
+    crate::progress::check(Stage::Cut)?;
     Ok(cut)
 }
 

@@ -168,3 +168,48 @@ pub fn add_phantom(s: &Session, p: &toothfuse::phantom::Phantom) {
         assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
     }
 }
+
+/// Runs the one-call fuse on `s` with the default options and asserts that it succeeded.
+pub fn fuse_default(s: &Session) {
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_fuse(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+}
+
+/// Positions (x, y, z per vertex) and indices of fused mesh `fdi` (0: the whole jaw) by the
+/// size query and copy-out.
+pub fn fused_copy(s: &Session, fdi: i32) -> (Vec<f64>, Vec<u32>) {
+    let (mut nv, mut ni) = (0usize, 0usize);
+    // SAFETY: live session; buffers sized from the size query.
+    unsafe {
+        let st = toothfuse_session_fused_size(s.0, fdi, &mut nv, &mut ni);
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        let mut v = vec![0f64; 3 * nv];
+        let mut t = vec![0u32; ni];
+        let (vp, tp) = (v.as_mut_ptr().cast(), t.as_mut_ptr());
+        let st =
+            toothfuse_session_copy_fused_vertices(s.0, fdi, vp, nv, 24, TOOTHFUSE_SCALAR_FLOAT64);
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        let st = toothfuse_session_copy_fused_indices(s.0, fdi, tp, ni);
+        assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+        (v, t)
+    }
+}
+
+/// The report JSON of the last fuse (size query, then copy).
+pub fn report_json(s: &Session) -> String {
+    let mut len = 0usize;
+    // SAFETY: live session; size query then copy.
+    unsafe {
+        assert_eq!(
+            toothfuse_session_report_json(s.0, ptr::null_mut(), 0, &mut len),
+            toothfuse_status::Ok
+        );
+        let mut buf = vec![0 as std::ffi::c_char; len + 1];
+        assert_eq!(
+            toothfuse_session_report_json(s.0, buf.as_mut_ptr(), len + 1, &mut len),
+            toothfuse_status::Ok
+        );
+        CStr::from_ptr(buf.as_ptr()).to_str().unwrap().to_owned()
+    }
+}
