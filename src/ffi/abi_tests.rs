@@ -1,7 +1,8 @@
 //! Unit tests of the raw-pointer layer on tiny meshes, small enough for Miri
 //! (`cargo +nightly miri test --lib ffi::`, run by scripts/check_sanitizers.sh): unaligned and
 //! strided float/double input, borrowed views, copy-out at the exact capacity and one short,
-//! NULL and misaligned parameters, the options struct size, and labeled jaws split into teeth.
+//! NULL and misaligned parameters, the options struct size, labeled jaws split into teeth, and
+//! the progress hook calling the host back with its pointer.
 
 use super::*;
 use std::ffi::{CStr, c_void};
@@ -343,4 +344,48 @@ fn thread_cap_is_set_per_session_and_null_is_refused() {
     };
     assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
     assert_eq!(crate::par::max_threads(), 0, "the cap ends with the call");
+}
+
+/// The progress hook as the session calls it: the host's callback gets its own pointer back
+/// with each report on the calling thread, and a nonzero answer cancels (small enough for Miri).
+#[test]
+fn progress_hook_passes_the_hosts_pointer_and_a_nonzero_answer_cancels() {
+    unsafe extern "C" fn count(data: *mut c_void, stage: u32, done: usize, total: usize) -> i32 {
+        // SAFETY: the test passes a live `[usize; 4]` it owns for the call.
+        let seen = unsafe { &mut *data.cast::<[usize; 4]>() };
+        *seen = [seen[0] + 1, stage as usize, done, total];
+        i32::from(done >= 1)
+    }
+    // SAFETY: NULL is allowed and refused.
+    let st =
+        unsafe { toothfuse_session_set_progress(ptr::null_mut(), Some(count), ptr::null_mut()) };
+    assert_eq!(st, toothfuse_status::NullParameter);
+    let mut seen = [0usize; 4];
+    let s = S::new();
+    // SAFETY: live session; `seen` outlives every call made while the hook is set.
+    let st = unsafe {
+        toothfuse_session_set_progress(s.0, Some(count), ptr::from_mut(&mut seen).cast())
+    };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    let hook = s_hook(&s);
+    use crate::progress::{Stage, advance, cancelled, start};
+    super::progress::with_hook(hook, || {
+        start(Stage::Cut, 2);
+        assert!(!cancelled());
+        advance();
+        assert!(cancelled());
+    });
+    assert_eq!(seen, [2, TOOTHFUSE_STAGE_CUT as usize, 1, 2]);
+    // Removed: nothing more is reported.
+    // SAFETY: live session.
+    let st = unsafe { toothfuse_session_set_progress(s.0, None, ptr::null_mut()) };
+    assert_eq!(st, toothfuse_status::Ok);
+    super::progress::with_hook(s_hook(&s), || start(Stage::Stitch, 1));
+    assert_eq!(seen[0], 2);
+}
+
+/// The progress hook held by the session behind `s`.
+fn s_hook(s: &S) -> Option<super::progress::Hook> {
+    // SAFETY: a live session, only read here.
+    unsafe { &*s.0 }.progress.get()
 }
