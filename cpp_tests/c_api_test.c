@@ -10,6 +10,15 @@
 
 int toothfuse_double_include_probe(void);
 
+/* A progress callback as a C host writes one: counts its reports, never cancels. */
+static int32_t count_reports(void *user_data, toothfuse_stage stage, size_t done, size_t total) {
+  (void)stage;
+  (void)done;
+  (void)total;
+  ++*(int *)user_data;
+  return 0;
+}
+
 static int failures = 0;
 
 #define CHECK(cond)                                                                  \
@@ -174,6 +183,20 @@ int main(void) {
                                            labels, 3, TOOTHFUSE_LABEL_DOMAIN_FACE),
                  TOOTHFUSE_STATUS_INVALID_ARGUMENT);
     CHECK(strstr(toothfuse_session_last_error(session), "label 99 (on face 2)") != NULL);
+  }
+
+  /* The progress callback from C: set (a plain C function), refused on NULL, removed. A call
+   * that fails before any stage starts reports nothing. */
+  {
+    int reports = 0;
+    toothfuse_progress_fn cb = count_reports;
+    CHECK(toothfuse_session_set_progress(NULL, cb, &reports) == TOOTHFUSE_STATUS_NULL_PARAMETER);
+    CHECK_STATUS(toothfuse_session_set_progress(session, cb, &reports), TOOTHFUSE_STATUS_OK);
+    CHECK_STATUS(toothfuse_session_cut(session, NULL), TOOTHFUSE_STATUS_WRONG_STATE);
+    CHECK(reports == 0);
+    CHECK_STATUS(toothfuse_session_set_progress(session, NULL, NULL), TOOTHFUSE_STATUS_OK);
+    CHECK(strcmp(toothfuse_status_string(TOOTHFUSE_STATUS_CANCELLED),
+                 "cancelled by the progress callback") == 0);
   }
 
   /* The fusion stages from C: no registration yet, so no cut; no cut, so no stitch. */
