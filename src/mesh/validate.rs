@@ -49,8 +49,8 @@ impl TriMesh {
     pub fn validate(&self, opts: &ValidateOptions) -> Result<ValidationReport> {
         self.check_elements(opts)?;
         let topo = EdgeTopology::new(self);
-        let report = self.topology_report_of(&topo);
-        self.check_topology(opts, &topo, &report)?;
+        let (report, first_non_manifold) = self.report_of(&topo);
+        self.check_topology(opts, &topo, &report, first_non_manifold)?;
         Ok(report)
     }
 
@@ -67,7 +67,8 @@ impl TriMesh {
             non_manifold_vertices: c.non_manifold_vertices.len(),
             ..Default::default()
         };
-        self.check_topology(opts, &topo, &counts)?;
+        let first_non_manifold = c.non_manifold_vertices.first().copied();
+        self.check_topology(opts, &topo, &counts, first_non_manifold)?;
         Ok(topo)
     }
 
@@ -117,12 +118,14 @@ impl TriMesh {
         Ok(())
     }
 
-    /// The topological checks of [`TriMesh::validate`] from the counts in `report`.
+    /// The topological checks of [`TriMesh::validate`] from the counts in `report` and the
+    /// lowest non-manifold vertex the counting found.
     fn check_topology(
         &self,
         opts: &ValidateOptions,
         topo: &EdgeTopology,
         report: &ValidationReport,
+        first_non_manifold: Option<u32>,
     ) -> Result<()> {
         if report.non_manifold_edges > 0 {
             for (a, b, c) in topo.undirected_edges() {
@@ -133,12 +136,8 @@ impl TriMesh {
                 }
             }
         }
-        if report.non_manifold_vertices > 0
-            && let Some(v) = non_manifold_vertices_of(self, topo).first()
-        {
-            return Err(Error::NonManifoldVertex {
-                vertex: *v as usize,
-            });
+        if let Some(v) = first_non_manifold {
+            return Err(Error::NonManifoldVertex { vertex: v as usize });
         }
         if opts.require_closed && report.boundary_edges > 0 {
             return Err(Error::NotClosed {
@@ -155,6 +154,12 @@ impl TriMesh {
 
     /// [`TriMesh::topology_report`] from an already built topology of this mesh.
     pub fn topology_report_of(&self, topo: &EdgeTopology) -> ValidationReport {
+        self.report_of(topo).0
+    }
+
+    /// [`TriMesh::topology_report_of`] and the lowest non-manifold vertex (the one
+    /// [`TriMesh::validate`] names).
+    fn report_of(&self, topo: &EdgeTopology) -> (ValidationReport, Option<u32>) {
         let c = super::fan_pass::fan_counts(self, topo, true);
         // Without non-manifold edges, a boundary half-edge (no reverse partner) is exactly a
         // boundary edge: no boundary edge, no loop.
@@ -163,7 +168,7 @@ impl TriMesh {
         } else {
             0
         };
-        ValidationReport {
+        let report = ValidationReport {
             vertices: self.positions.len(),
             faces: self.triangles.len(),
             boundary_edges: c.boundary_edges,
@@ -172,7 +177,8 @@ impl TriMesh {
             unused_vertices: c.unused_vertices,
             components: c.components.unwrap_or_default(),
             boundary_loops: loops,
-        }
+        };
+        (report, c.non_manifold_vertices.first().copied())
     }
 }
 
