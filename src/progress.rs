@@ -196,6 +196,15 @@ pub(crate) fn cancelled() -> bool {
     shared().is_some_and(|s| s.cancelled.load(Ordering::Relaxed))
 }
 
+/// One unit of `stage` (a tooth, a label) as a parallel step's item runs it: `work` is not
+/// started once the callback has asked to stop ([`Error::Cancelled`] instead), and the unit is
+/// counted ([`advance`]) either way.
+pub(crate) fn unit<T>(stage: Stage, work: impl FnOnce() -> Result<T>) -> Result<T> {
+    let r = check(stage).and_then(|()| work());
+    advance();
+    r
+}
+
 /// One unit of `stage` finished ([`advance`]), then [`check`].
 pub(crate) fn step(stage: Stage) -> Result<()> {
     advance();

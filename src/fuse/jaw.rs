@@ -117,10 +117,9 @@ pub(crate) fn cut_crowns(
         &work,
         |w| w.1.triangles.len() + w.2.triangles.len(),
         |&(fdi, crown, tooth, t): &(u8, &TriMesh, &TriMesh, &ToothTransforms)| {
-            let r = crate::progress::check(Stage::Cut).and_then(|()| {
+            let r = crate::progress::unit(Stage::Cut, || {
                 cut_tooth(fdi, crown, tooth, &t.ios_to_output, &t.cbct_to_output, opts)
             });
-            crate::progress::advance();
             (fdi, r)
         },
     );
@@ -166,7 +165,10 @@ pub fn stitch_jaw(cut: &CutJaw, opts: &FuseOptions) -> FusedJaw {
     let results = crate::par::map_ordered_by_cost(
         &work,
         |c| c.margin.len(),
-        |c| (c.fdi(), stitch_counted(|| stitch_tooth(c, opts))),
+        |c| {
+            let r = crate::progress::unit(Stage::Stitch, || stitch_tooth(c, opts));
+            (c.fdi(), r)
+        },
     );
     crate::progress::ended();
     merged(results, cut, opts)
@@ -191,7 +193,7 @@ pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw 
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
                 .take();
             let r = match taken {
-                Some(c) => stitch_counted(|| stitch_tooth(&c, opts)),
+                Some(c) => crate::progress::unit(Stage::Stitch, || stitch_tooth(&c, opts)),
                 None => Err(Error::InvalidArgument(format!(
                     "tooth {fdi}: handed out for stitching twice"
                 ))),
@@ -201,15 +203,6 @@ pub(crate) fn stitch_jaw_owned(mut cut: CutJaw, opts: &FuseOptions) -> FusedJaw 
     );
     crate::progress::ended();
     merged(results, &cut, opts)
-}
-
-/// One tooth's stitching `stitch` as a unit of the stitching stage's progress: not started once
-/// the caller's progress callback has asked to stop ([`Error::Cancelled`] instead), counted
-/// when done.
-fn stitch_counted(stitch: impl FnOnce() -> Result<FusedTooth>) -> Result<FusedTooth> {
-    let r = crate::progress::check(Stage::Stitch).and_then(|()| stitch());
-    crate::progress::advance();
-    r
 }
 
 /// The fused jaw of the stitching `results` (in FDI order) of `cut`'s teeth.

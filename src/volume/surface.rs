@@ -113,14 +113,13 @@ pub fn surface_teeth(
             labels.len()
         )));
     }
-    use crate::progress::{Stage, advance, check, ended, start};
+    use crate::progress::{Stage, check, ended, start, unit};
     start(Stage::Surface, work.len());
     let meshes = crate::par::map_ordered(&work, |&(_, label, _)| {
         let (lo, hi) = boxes[&label];
-        let mesh = check(Stage::Surface)
-            .and_then(|()| surface_box(vol, lo, hi, opts.smoothing_passes, |l| l == label));
-        advance();
-        mesh
+        unit(Stage::Surface, || {
+            surface_box(vol, lo, hi, opts.smoothing_passes, |l| l == label)
+        })
     });
     ended();
     check(Stage::Surface)?;
