@@ -395,10 +395,20 @@ fn coarse_lower_jaw_self_folded_band_reshaped() {
 /// crossing the fusion added left (with a band face, or with a face added to the crown).
 /// Returns the report.
 fn fused_without_band_crossings(name: &str, demo_args: &[&str]) -> serde_json::Value {
+    fused_teeth_without_band_crossings(name, demo_args, 14)
+}
+
+/// [`fused_without_band_crossings`] for a jaw of which `teeth` are fused (a variant with teeth
+/// missing from either scan).
+fn fused_teeth_without_band_crossings(
+    name: &str,
+    demo_args: &[&str],
+    fused: usize,
+) -> serde_json::Value {
     let d = tmp(name);
     let r = demo_fused(&d, demo_args);
     let teeth = r["teeth"].as_array().unwrap();
-    assert_eq!(teeth.len(), 14, "{r}");
+    assert_eq!(teeth.len(), fused, "{r}");
     for t in teeth {
         let fdi = t["fdi"].as_u64().unwrap();
         assert_eq!(t["watertight"], true, "tooth {fdi}");
@@ -466,6 +476,50 @@ fn coarse_lower_jaw_tilted_margin_keeps_its_orientation() {
         "coarse_lower_tilted_margin",
         &["--seed", "21", "--jaw", "lower", "--ios-export", "coarse"],
     );
+}
+
+/// A coarse lower jaw with teeth missing from either scan, fused from the command line, whose
+/// incisor 41's labelled crown reaches the incisal edge at its contact with 31: the margin's
+/// plane lies across the tooth (82° from the CBCT tooth's long axis), so the cut about it
+/// fails ("crown cut leaves no root or no crown"). The cut is made again about the long axis,
+/// pointed by the crown (the margin frame's axis cannot tell which end is the root), and the
+/// tooth is fused, said so in its warnings, with every other tooth that has both scans (the
+/// tooth was lost).
+#[test]
+fn coarse_lower_jaw_cut_across_the_tooth_is_made_about_the_long_axis() {
+    let r = fused_teeth_without_band_crossings(
+        "coarse_lower_cut_across",
+        &[
+            "--seed",
+            "48",
+            "--jaw",
+            "lower",
+            "--variant",
+            "missing",
+            "--ios-export",
+            "coarse",
+        ],
+        8,
+    );
+    let teeth = r["teeth"].as_array().unwrap();
+    let t41 = teeth
+        .iter()
+        .find(|t| t["fdi"] == 41)
+        .expect("tooth 41 fused");
+    assert!(
+        t41["warnings"].as_array().unwrap().iter().any(|w| {
+            let w = w.as_str().unwrap();
+            w.contains("the cut about it failed") && w.contains("cut about the long axis")
+        }),
+        "{t41}"
+    );
+    let skipped: Vec<u64> = r["skipped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["fdi"].as_u64().unwrap())
+        .collect();
+    assert_eq!(skipped, [32, 42, 45, 46, 47], "{r}");
 }
 
 /// A coarse upper jaw fused from the command line whose incisor 12's margin holds three

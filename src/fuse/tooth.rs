@@ -300,7 +300,14 @@ fn cut_inner(
     }
     // Crown removal.
     let margin_pts = margin_pts_of(&crown, &margin);
-    let (frame, rc) = cut_root(&root_in, &margin_pts, frame, opts, &mut warnings)?;
+    let (frame, rc) = cut_root(
+        &root_in,
+        &margin_pts,
+        frame,
+        crown_centroid,
+        opts,
+        &mut warnings,
+    )?;
     // Where the cut was made about the CBCT tooth's long axis instead (the margin's plane tilted
     // far off it), the crown's orientation is judged again about that axis: about the tilted
     // one the margin's winding can come out either way (a scalloped incisor's margin was read
@@ -417,43 +424,54 @@ fn fold_trim(
     }
 }
 
-/// Crown removal along the margin `margin_pts` about `frame`'s axis; where that cut does not go
-/// once around the tooth, the cut is made again about the CBCT tooth's long axis (kept when it
-/// does). Returns the frame used and the cut.
+/// Crown removal along the margin `margin_pts` about `frame`'s axis; where that cut fails or
+/// does not go once around the tooth, the cut is made again about the CBCT tooth's long axis
+/// (kept when it does). Returns the frame used and the cut.
 fn cut_root(
     root_in: &TriMesh,
     margin_pts: &[DVec3],
-    mut frame: ToothFrame,
+    frame: ToothFrame,
+    crown_point: DVec3,
     opts: &FuseOptions,
     warnings: &mut Vec<String>,
 ) -> Result<(ToothFrame, RootCut)> {
-    let mut rc = cut::cut_crown(root_in, margin_pts, &frame, &opts.cut)?;
-    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
-    // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off, and then the cut
-    // does not go around the tooth. Such a cut is made again about the CBCT tooth's long axis,
-    // whatever the tilt (a tooth that cuts well keeps its margin frame: a molar's long axis can
-    // lie across it; and a tooth whose cut fails has nothing to lose).
-    if !winds_once(&frame, &rc)
-        && let Some((_, long)) = crate::geom::principal_axis(&root_in.positions)
-    {
-        let long = if long.dot(frame.axis) < 0.0 {
-            -long
-        } else {
-            long
-        };
-        let tilt = frame.axis.angle_between(long).to_degrees();
-        let long_frame = ToothFrame::new(frame.center, long);
-        if let Ok(r) = cut::cut_crown(root_in, margin_pts, &long_frame, &opts.cut)
-            && winds_once(&long_frame, &r)
-        {
-            warnings.push(format!(
-                "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis and the cut about it did not go around the tooth: cut about the long axis"
-            ));
-            frame = long_frame;
-            rc = r;
-        }
+    let first = cut::cut_crown(root_in, margin_pts, &frame, &opts.cut);
+    if matches!(&first, Ok(rc) if winds_once(&frame, rc)) {
+        return first.map(|rc| (frame, rc));
     }
-    Ok((frame, rc))
+    // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
+    // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off (a lower incisor
+    // whose labelled crown reaches the incisal edge at a contact: 89.5°), and then the cut about
+    // it fails or does not go around the tooth. Such a cut is made again about the CBCT tooth's
+    // long axis, whatever the tilt (a tooth that cuts well keeps its margin frame: a molar's long
+    // axis can lie across it; and a tooth whose cut fails has nothing to lose).
+    if let Some(long_frame) = long_axis_frame(root_in, frame.center, crown_point)
+        && let Ok(r) = cut::cut_crown(root_in, margin_pts, &long_frame, &opts.cut)
+        && winds_once(&long_frame, &r)
+    {
+        // The angle between the two axes as lines (the margin frame's may point either way).
+        let tilt = frame.axis.angle_between(long_frame.axis).to_degrees();
+        let tilt = tilt.min(180.0 - tilt);
+        let how = match &first {
+            Ok(_) => "did not go around the tooth".to_string(),
+            Err(e) => format!("failed ({e})"),
+        };
+        warnings.push(format!(
+            "the margin's plane is tilted {tilt:.0}° from the CBCT tooth's long axis and the cut about it {how}: cut about the long axis"
+        ));
+        return Ok((long_frame, r));
+    }
+    first.map(|rc| (frame, rc))
+}
+
+/// The frame about the CBCT tooth's long axis (its vertices' principal axis) through `center`,
+/// pointing from the tooth's middle toward `crown_point` (the IOS crown's centroid): the margin
+/// frame's axis cannot give that direction where it lies across the tooth.
+fn long_axis_frame(root_in: &TriMesh, center: DVec3, crown_point: DVec3) -> Option<ToothFrame> {
+    let (mid, long) = crate::geom::principal_axis(&root_in.positions)?;
+    let toward_crown = (crown_point - mid).dot(long);
+    (toward_crown != 0.0 && toward_crown.is_finite())
+        .then(|| ToothFrame::new(center, long * toward_crown.signum()))
 }
 
 /// Whether the root's cut loop goes once around the tooth axis (either way), as the band needs.
