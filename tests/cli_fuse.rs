@@ -522,6 +522,36 @@ fn coarse_lower_jaw_cut_across_the_tooth_is_made_about_the_long_axis() {
     assert_eq!(skipped, [32, 42, 45, 46, 47], "{r}");
 }
 
+/// A coarse lower jaw fused from the command line whose incisor 31's labelled crown climbs its
+/// contacts steeply: a cut following the margin's lowest height at each angle climbed the flanks
+/// as steeply, the band between them folded over itself and through the root (17 pairs left
+/// after every remedy, 118 before the untangling). That tooth is cut again climbing no faster
+/// than 45° ([`CutOptions::max_slope`]), said so in its warnings, and every tooth ends with no
+/// crossing added.
+///
+/// [`CutOptions::max_slope`]: toothfuse::cut::CutOptions::max_slope
+#[test]
+fn coarse_lower_jaw_steep_contact_flanks_cut_again_flatter() {
+    let r = fused_without_band_crossings(
+        "coarse_lower_steep_flanks",
+        &["--seed", "44", "--jaw", "lower", "--ios-export", "coarse"],
+    );
+    let flat: Vec<&serde_json::Value> = r["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| {
+            t["warnings"].as_array().unwrap().iter().any(|w| {
+                w.as_str()
+                    .unwrap()
+                    .contains("the crown cut made again climbing no steeper than 45°")
+            })
+        })
+        .collect();
+    assert_eq!(flat.len(), 1, "{r}");
+    assert_eq!(flat[0]["fdi"], 31, "{}", flat[0]);
+}
+
 /// A coarse upper jaw fused from the command line whose incisor 12's margin holds three
 /// vertices a few micrometres apart: the band joins the outer two by a chord and folds through
 /// the middle one's sliver crown faces, and trimming them leaves a notch as narrow as the gap

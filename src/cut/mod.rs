@@ -38,6 +38,11 @@ pub struct CutOptions {
     /// Half-width (radians) of the running minimum of the margin height used by
     /// [`CutMethod::LevelSet`].
     pub window: f64,
+    /// Steepest climb of [`CutMethod::LevelSet`]'s cut along the tooth (height per unit of
+    /// length around it; 1 = 45°), where the margin climbs a contact's flank faster; 0: none
+    /// (see [`MarginHeight::new`]). None by default: the fusion cuts a tooth again with a bound
+    /// only where its band is left crossed.
+    pub max_slope: f64,
 }
 
 impl Default for CutOptions {
@@ -46,6 +51,7 @@ impl Default for CutOptions {
             method: CutMethod::LevelSet,
             offset: 0.8,
             window: 0.15,
+            max_slope: 0.0,
         }
     }
 }
@@ -127,7 +133,7 @@ fn below_level(
     frame: &ToothFrame,
     opts: &CutOptions,
 ) -> Vec<bool> {
-    let mh = MarginHeight::new(frame, margin, opts.window);
+    let mh = MarginHeight::new(frame, margin, opts.window, opts.max_slope);
     let below: Vec<bool> = cbct
         .positions
         .iter()

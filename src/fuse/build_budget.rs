@@ -4,9 +4,10 @@
 //! root peeled at the cut, each up to its own limit. This caps their sum: the builds of the
 //! tooth as cut and their remedies make at most [`MAX_BUILDS`] bounded builds whatever the
 //! input; once they are spent no further build is started and the best build so far is kept.
-//! The last remedy, for a tooth still crossed after all of them, makes new cuts of the tooth
-//! (its fold trimmed farther, [`super::fold_wide`]) whose builds have a cap of their own, so a
-//! tooth's stitching costs at most twice [`MAX_BUILDS`] builds.
+//! The last two remedies, for a tooth still crossed after all of them, make new cuts of the
+//! tooth (its fold trimmed farther, [`super::fold_wide`]; its CBCT tooth cut again flatter,
+//! [`super::flat_cut`]) whose builds have a cap of their own each, so a tooth's stitching costs
+//! at most three times [`MAX_BUILDS`] builds.
 //!
 //! The count lives in a thread-local: a tooth is stitched on one thread from start to end
 //! ([`Scope`] starts its count), and the builds are counted where they are made
@@ -15,7 +16,7 @@
 use std::cell::Cell;
 
 /// Band builds per tooth at most, over its builds and remedies as cut (and as many again for
-/// the last remedy's new cuts). On the rough phantom exports and the foreign jaws a tooth takes
+/// each of the last two remedies' new cuts). On the rough phantom exports and the foreign jaws a tooth takes
 /// at most 36 (median 4; a clean tooth takes one).
 pub(super) const MAX_BUILDS: usize = 48;
 

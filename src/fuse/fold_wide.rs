@@ -14,7 +14,8 @@
 //! crossed, so every other tooth's fusion is unchanged.
 //!
 //! These crowns are new cuts of the tooth, whose builds are counted afresh against a cap of
-//! their own ([`super::build_budget::Scope`]): with them a tooth makes at most twice
+//! their own ([`super::build_budget::Scope`]), as are those of the flatter cut after it
+//! ([`super::flat_cut`]): with them a tooth makes at most three times
 //! [`super::build_budget::MAX_BUILDS`] builds.
 
 use super::FuseOptions;

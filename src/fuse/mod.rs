@@ -7,6 +7,7 @@ mod band_crossings;
 mod band_opt;
 mod build_budget;
 mod crossed;
+mod flat_cut;
 mod fold_wide;
 pub mod fringe;
 mod inlet;
@@ -105,6 +106,7 @@ impl FuseOptions {
                     method: CutMethod::Dijkstra,
                     offset: 0.8,
                     window: 0.0,
+                    max_slope: 0.0,
                 },
                 stitch: StitchOptions {
                     points: PointGeneration::Recursive(InterpOptions::default()),

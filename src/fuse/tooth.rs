@@ -115,6 +115,9 @@ pub struct CutTooth {
     pub(super) trimmed: super::fringe::FringeTrim,
     pub(super) dist_in: Vec<f64>,
     pub(super) root: RootCut,
+    /// The whole CBCT tooth in the output frame, outward (the remedy that cuts again,
+    /// [`super::flat_cut`], needs it; shared by the tooth's copies).
+    pub(super) cbct: std::sync::Arc<TriMesh>,
     pub(super) root_dirs: Vec<DVec3>,
     pub(super) chords: Vec<(BandVertex, BandVertex)>,
     pub(super) warnings: Vec<String>,
@@ -341,6 +344,7 @@ fn cut_inner(
         trimmed,
         dist_in,
         root: rc,
+        cbct: std::sync::Arc::new(root_in),
         root_dirs,
         chords,
         warnings,
@@ -475,7 +479,7 @@ fn long_axis_frame(root_in: &TriMesh, center: DVec3, crown_point: DVec3) -> Opti
 }
 
 /// Whether the root's cut loop goes once around the tooth axis (either way), as the band needs.
-fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
+pub(super) fn winds_once(frame: &ToothFrame, rc: &RootCut) -> bool {
     let w = stitch::param::winding(frame, &margin_pts_of(&rc.root, &rc.cut_loop));
     stitch::param::once_around(w).is_some()
 }

@@ -65,13 +65,13 @@ fn a_tooth_makes_at_most_its_allowed_builds_and_stays_closed() {
         assert_eq!(f.source, full.source);
     }
     // Lower caps: no build beyond them, and the tooth is still one closed manifold.
-    // (The last remedy's new cuts, for a tooth the capped builds leave crossed, have a cap of
-    // their own.)
+    // (The last two remedies' new cuts, for a tooth the capped builds leave crossed, have a
+    // cap of their own each.)
     for cap in [1, 2, n / 2] {
         let _l = Limit::set(cap);
         let (f, m, all) = stitched(ct);
         assert!(m <= cap && m >= 1, "cap {cap}: {m} builds");
-        assert!(all <= 2 * cap, "cap {cap}: {all} builds in all");
+        assert!(all <= 3 * cap, "cap {cap}: {all} builds in all");
         let q = &f.quality;
         assert!(
             q.closed && q.manifold && q.components == 1,

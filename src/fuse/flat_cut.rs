@@ -1,0 +1,156 @@
+//! The remedy for a tooth whose band still crosses itself or the root after every other: the
+//! crown cut made again with its climb bounded ([`FLAT_CUT_SLOPE`]), and the tooth's builds
+//! and remedies made again on that root.
+//!
+//! The level-set cut follows the margin's lowest height at each angle, less the offset. Where a
+//! labelled crown reaches up a contact (a lower incisor's label can run from the cervix nearly
+//! to the incisal edge there), that height climbs the contact's flank as steeply as the margin
+//! does, and so does the cut: the band between them is a strip a fraction of the offset wide
+//! measured across the flank, and it folds over itself and through the root there (the coarse
+//! seed-44 lower incisor 31: 17 pairs left after every other remedy). Cut again no steeper than
+//! [`FLAT_CUT_SLOPE`], the root there ends lower and the band is as tall as it needs. It runs
+//! only on a tooth left crossed, so every other tooth's fusion is unchanged: made the default
+//! for every tooth, it cleared that tooth and left 2 pairs on another (the coarse seed-8 lower
+//! molar 46) that its remedies clear with the cut as it is.
+//!
+//! The new cut's builds are counted afresh against a cap of their own
+//! ([`super::build_budget::Scope`]).
+
+use super::FuseOptions;
+use super::assembly::{Remedied, crossings_left, remedied};
+use super::tooth::{CutTooth, loop_chords, loop_dirs, margin_pts_of, winds_once};
+use crate::cut::{self, CutMethod, CutOptions};
+use crate::stitch::BandVertex;
+
+/// The steepest climb of the cut made again (height per unit of length around the tooth at the
+/// margin: 1 = 45°; see [`crate::cut::MarginHeight::new`]).
+pub(super) const FLAT_CUT_SLOPE: f64 = 1.0;
+
+/// The builds and remedies of `ct` ([`remedied`]) made again on its CBCT tooth cut with the
+/// climb bounded ([`flatter_cut`]); `None` when the cut is the level-set one already bounded as
+/// much, the new cut fails or removes no more, or its builds leave no fewer crossings than
+/// `left`.
+pub(super) fn rebuilt(ct: &CutTooth, opts: &FuseOptions, left: usize) -> Option<Remedied> {
+    let _builds = super::build_budget::Scope::start();
+    if !super::build_budget::more() {
+        return None;
+    }
+    let flat = flatter_cut(ct, &opts.cut)?;
+    let mut r = remedied(&flat, opts).ok()?;
+    (crossings_left(&r.kept) < left).then(|| {
+        r.tooth = r.tooth.or(Some(flat));
+        r
+    })
+}
+
+/// `ct` with its CBCT tooth cut again about the same frame and margin, no steeper than
+/// [`FLAT_CUT_SLOPE`]; its root, loop directions and chords made anew (with a warning). `None`
+/// for another cut method, a climb bounded as much already, a cut that fails, does not go
+/// around the tooth, or removes no more of the CBCT tooth than the cut as it is.
+fn flatter_cut(ct: &CutTooth, cut_opts: &CutOptions) -> Option<CutTooth> {
+    let bounded = cut_opts.max_slope > 0.0 && cut_opts.max_slope <= FLAT_CUT_SLOPE;
+    if cut_opts.method != CutMethod::LevelSet || bounded {
+        return None;
+    }
+    let flat_opts = CutOptions {
+        max_slope: FLAT_CUT_SLOPE,
+        ..*cut_opts
+    };
+    let margin = margin_pts_of(&ct.crown, &ct.margin);
+    let rc = cut::cut_crown(&ct.cbct, &margin, &ct.frame, &flat_opts).ok()?;
+    if !winds_once(&ct.frame, &rc) || rc.removed_faces <= ct.root.removed_faces {
+        return None;
+    }
+    let mut out = ct.clone();
+    out.root_dirs = loop_dirs(&rc.root, &rc.cut_loop, ct.frame.axis);
+    out.chords = ct
+        .chords
+        .iter()
+        .copied()
+        .filter(|c| matches!(c.0, BandVertex::Upper(_)))
+        .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
+        .collect();
+    out.warnings.push(format!(
+        "the band crossed itself or the root after every remedy: the crown cut made again climbing no steeper than {:.0}° along the margin ({} more CBCT faces removed) and the tooth built again",
+        FLAT_CUT_SLOPE.atan().to_degrees(),
+        rc.removed_faces - ct.root.removed_faces
+    ));
+    out.root = rc;
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fuse::{cut_tooth, stitch_tooth};
+    use crate::geom::Rigid;
+    use crate::mesh::TriMesh;
+    use crate::mesh::fixtures::ellipsoid;
+
+    /// A tooth standing along z (a CBCT ellipsoid) and, as the IOS crown, the top of a finer
+    /// one above z = 4, or above z = `notch_top` within `notch_deg` of +x: a crown whose label
+    /// climbs a contact's flank there (vertically).
+    fn tooth(notch_deg: f64, notch_top: f64) -> CutTooth {
+        let cbct = ellipsoid(40, 48, 4.0, 10.0);
+        let fine = ellipsoid(80, 96, 4.0, 10.0);
+        let keep = |v: u32| {
+            let p = fine.positions[v as usize];
+            let at = p.y.atan2(p.x).to_degrees().abs();
+            p.z > if at < notch_deg { notch_top } else { 4.0 }
+        };
+        let mut crown = TriMesh::new(
+            fine.positions.clone(),
+            fine.triangles
+                .iter()
+                .copied()
+                .filter(|t| t.iter().all(|&v| keep(v)))
+                .collect(),
+        );
+        crown.compact();
+        let opts = FuseOptions::default();
+        cut_tooth(11, &crown, &cbct, &Rigid::IDENTITY, &Rigid::IDENTITY, &opts)
+            .expect("the ellipsoid tooth cuts")
+    }
+
+    /// Where the margin climbs 3.5 mm up a 50° notch, the cut made again climbs no steeper: it
+    /// removes more of the CBCT tooth, its loop goes once around the tooth, it says so, and the
+    /// tooth built on it is closed and manifold with no crossing left.
+    #[test]
+    fn steep_margin_is_cut_again_lower() {
+        let ct = tooth(25.0, 7.5);
+        let opts = FuseOptions::default();
+        let flat = flatter_cut(&ct, &opts.cut).expect("a flatter cut");
+        assert!(flat.root.removed_faces > ct.root.removed_faces);
+        assert!(winds_once(&flat.frame, &flat.root));
+        assert!(
+            flat.warnings
+                .last()
+                .is_some_and(|w| w.contains("climbing no steeper than 45°")),
+            "{:?}",
+            flat.warnings
+        );
+        let fused = stitch_tooth(&flat, &opts).expect("stitched on the flatter cut");
+        let q = &fused.quality;
+        assert!(q.closed && q.manifold && q.components == 1, "{q:?}");
+        assert_eq!(q.band_crossings_left, 0, "{q:?}");
+    }
+
+    /// No flatter cut where there is nothing to flatten (a level margin: the cut removes no
+    /// more), for the paper's Dijkstra cut, or for a cut bounded as much already.
+    #[test]
+    fn no_flatter_cut_where_it_changes_nothing() {
+        let opts = FuseOptions::default();
+        assert!(flatter_cut(&tooth(0.0, 4.0), &opts.cut).is_none());
+        let ct = tooth(25.0, 7.5);
+        let dijkstra = CutOptions {
+            method: CutMethod::Dijkstra,
+            ..opts.cut
+        };
+        assert!(flatter_cut(&ct, &dijkstra).is_none());
+        let bounded = CutOptions {
+            max_slope: FLAT_CUT_SLOPE,
+            ..opts.cut
+        };
+        assert!(flatter_cut(&ct, &bounded).is_none());
+    }
+}
