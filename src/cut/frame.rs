@@ -223,14 +223,16 @@ mod tests {
             let step = 0.05 + rng.unit();
             let mut got = bins.clone();
             limit_slope(&mut got, step);
-            for k in 0..n {
-                let want = (0..n)
-                    .map(|j| {
+            for (k, &g) in got.iter().enumerate() {
+                let want = bins
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &b)| {
                         let d = (j as i64 - k as i64).rem_euclid(n as i64) as usize;
-                        bins[j] + step * d.min(n - d) as f64
+                        b + step * d.min(n - d) as f64
                     })
                     .fold(f64::INFINITY, f64::min);
-                assert!((got[k] - want).abs() < 1e-9, "case {case} bin {k}");
+                assert!((g - want).abs() < 1e-9, "case {case} bin {k}");
             }
         }
     }
