@@ -391,6 +391,22 @@ fn coarse_lower_jaw_self_folded_band_reshaped() {
     );
 }
 
+/// The fused teeth of report `r` with a warning containing `text`.
+fn warned<'a>(r: &'a serde_json::Value, text: &str) -> Vec<&'a serde_json::Value> {
+    r["teeth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| {
+            t["warnings"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|w| w.as_str().unwrap().contains(text))
+        })
+        .collect()
+}
+
 /// [`demo_fused`] in a fresh folder named `name`: all 14 teeth fused, each watertight with no
 /// crossing the fusion added left (with a band face, or with a face added to the crown).
 /// Returns the report.
@@ -431,18 +447,7 @@ fn coarse_lower_jaw_fold_beyond_the_fringe_is_trimmed_wider() {
         "coarse_lower_fold_wide",
         &["--seed", "8", "--jaw", "lower", "--ios-export", "coarse"],
     );
-    let widened: Vec<&serde_json::Value> = r["teeth"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|t| {
-            t["warnings"].as_array().unwrap().iter().any(|w| {
-                w.as_str()
-                    .unwrap()
-                    .contains("the fold trimmed again within")
-            })
-        })
-        .collect();
+    let widened = warned(&r, "the fold trimmed again within");
     assert_eq!(widened.len(), 1, "{r}");
     let t = widened[0];
     assert_eq!(t["fdi"], 46, "{t}");
@@ -501,18 +506,10 @@ fn coarse_lower_jaw_cut_across_the_tooth_is_made_about_the_long_axis() {
         ],
         8,
     );
-    let teeth = r["teeth"].as_array().unwrap();
-    let t41 = teeth
-        .iter()
-        .find(|t| t["fdi"] == 41)
-        .expect("tooth 41 fused");
-    assert!(
-        t41["warnings"].as_array().unwrap().iter().any(|w| {
-            let w = w.as_str().unwrap();
-            w.contains("the cut about it failed") && w.contains("cut about the long axis")
-        }),
-        "{t41}"
-    );
+    let recut = warned(&r, "the cut about it failed");
+    assert_eq!(recut.len(), 1, "{r}");
+    assert_eq!(recut[0]["fdi"], 41, "{}", recut[0]);
+    assert_eq!(warned(&r, "cut about the long axis"), recut, "{r}");
     let skipped: Vec<u64> = r["skipped"]
         .as_array()
         .unwrap()
@@ -536,18 +533,7 @@ fn coarse_lower_jaw_steep_contact_flanks_cut_again_flatter() {
         "coarse_lower_steep_flanks",
         &["--seed", "44", "--jaw", "lower", "--ios-export", "coarse"],
     );
-    let flat: Vec<&serde_json::Value> = r["teeth"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|t| {
-            t["warnings"].as_array().unwrap().iter().any(|w| {
-                w.as_str()
-                    .unwrap()
-                    .contains("the crown cut made again climbing no steeper than 45°")
-            })
-        })
-        .collect();
+    let flat = warned(&r, "the crown cut made again climbing no steeper than 45°");
     assert_eq!(flat.len(), 1, "{r}");
     assert_eq!(flat[0]["fdi"], 31, "{}", flat[0]);
 }

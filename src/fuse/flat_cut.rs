@@ -18,9 +18,8 @@
 
 use super::FuseOptions;
 use super::assembly::{Remedied, crossings_left, remedied};
-use super::tooth::{CutTooth, loop_chords, loop_dirs, margin_pts_of, winds_once};
+use super::tooth::{CutTooth, margin_pts_of, winds_once};
 use crate::cut::{self, CutMethod, CutOptions};
-use crate::stitch::BandVertex;
 
 /// The steepest climb of the cut made again (height per unit of length around the tooth at the
 /// margin: 1 = 45°; see [`crate::cut::MarginHeight::new`]).
@@ -61,21 +60,13 @@ fn flatter_cut(ct: &CutTooth, cut_opts: &CutOptions) -> Option<CutTooth> {
     if !winds_once(&ct.frame, &rc) || rc.removed_faces <= ct.root.removed_faces {
         return None;
     }
-    let mut out = ct.clone();
-    out.root_dirs = loop_dirs(&rc.root, &rc.cut_loop, ct.frame.axis);
-    out.chords = ct
-        .chords
-        .iter()
-        .copied()
-        .filter(|c| matches!(c.0, BandVertex::Upper(_)))
-        .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
-        .collect();
+    let more = rc.removed_faces - ct.root.removed_faces;
+    let mut out = ct.with_root(rc);
     out.warnings.push(format!(
         "the band crossed itself or the root after every remedy: the crown cut made again climbing no steeper than {:.0}° along the margin ({} more CBCT faces removed) and the tooth built again",
         FLAT_CUT_SLOPE.atan().to_degrees(),
-        rc.removed_faces - ct.root.removed_faces
+        more
     ));
-    out.root = rc;
     Some(out)
 }
 

@@ -7,9 +7,9 @@
 use super::FuseOptions;
 use super::assembly::{Assembled, crossings_left};
 use super::fringe::{FringeTrim, Listed, edge_distance, trim_fringe};
-use super::tooth::{CutTooth, loop_chords, loop_dirs};
+use super::tooth::CutTooth;
+use crate::cut::RootCut;
 use crate::mesh::{TriMesh, boundary_loops};
-use crate::stitch::BandVertex;
 
 /// The builds of a tooth made again on its root peeled at the cut ([`rebuilt_on_peeled_root`]).
 pub(super) struct Rebuilt {
@@ -86,22 +86,15 @@ fn root_trimmed(ct: &CutTooth, a: &Assembled) -> Option<CutTooth> {
         .iter()
         .find_map(|&mode| trim_fringe(root, &ids, &dist, ROOT_REACH_MM, &hit, mode))?;
     let cut_loop = boundary_loops(&trimmed).into_iter().next()?;
-    let mut out = ct.clone();
-    out.root.source_vertex = map
-        .iter()
-        .map(|&v| ct.root.source_vertex[v as usize])
-        .collect();
-    out.root.removed_faces += t.faces;
-    out.root_dirs = loop_dirs(&trimmed, &cut_loop, ct.frame.axis);
-    out.chords = ct
-        .chords
-        .iter()
-        .copied()
-        .filter(|c| matches!(c.0, BandVertex::Upper(_)))
-        .chain(loop_chords(&trimmed, &cut_loop, BandVertex::Lower))
-        .collect();
-    out.root.root = TriMesh::new(trimmed.positions, trimmed.triangles);
-    out.root.cut_loop = cut_loop;
+    let mut out = ct.with_root(RootCut {
+        source_vertex: map
+            .iter()
+            .map(|&v| ct.root.source_vertex[v as usize])
+            .collect(),
+        removed_faces: ct.root.removed_faces + t.faces,
+        root: TriMesh::new(trimmed.positions, trimmed.triangles),
+        cut_loop,
+    });
     out.warnings.push(format!(
         "the band crossed the CBCT root near the cut and no crown face: {} root faces peeled from the cut ({} root vertices left out) and the tooth built again",
         t.faces, t.vertices

@@ -180,6 +180,23 @@ impl CutTooth {
         self.cut_ms
     }
 
+    /// This tooth on another root `rc` of its CBCT tooth (cut otherwise, or peeled at the cut):
+    /// the root's loop directions and chords made anew, the crown side as it is.
+    pub(super) fn with_root(&self, rc: RootCut) -> CutTooth {
+        CutTooth {
+            root_dirs: loop_dirs(&rc.root, &rc.cut_loop, self.frame.axis),
+            chords: self
+                .chords
+                .iter()
+                .copied()
+                .filter(|c| matches!(c.0, BandVertex::Upper(_)))
+                .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
+                .collect(),
+            root: rc,
+            ..self.clone()
+        }
+    }
+
     /// The chords of the root's cut loop (the crown's are the crown side's).
     pub(super) fn root_chords(&self) -> impl Iterator<Item = (BandVertex, BandVertex)> + '_ {
         self.chords
