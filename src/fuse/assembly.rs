@@ -286,7 +286,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     // Still crossed: the crown cut made again no steeper along the margin's flanks.
     if crossings_left(&r.kept) > 0
         && opts.fringe_reach_mm > 0.0
-        && let Some(f) = super::flat_cut::rebuilt(ct, opts, crossings_left(&r.kept))
+        && let Some(f) = super::flat_cut::rebuilt(ct, opts, &r.kept)
     {
         r = f;
     }

@@ -13,32 +13,66 @@
 //! for every tooth, it cleared that tooth and left 2 pairs on another (the coarse seed-8 lower
 //! molar 46) that its remedies clear with the cut as it is.
 //!
-//! The new cut's builds are counted afresh against a cap of their own
-//! ([`super::build_budget::Scope`]).
+//! The tooth is built again only where the flatter cut takes CBCT surface away near a crossing
+//! left ([`NEAR_CROSSING_MM`]); the new cut's builds are counted afresh against a cap of their
+//! own ([`super::build_budget::Scope`]).
 
 use super::FuseOptions;
-use super::assembly::{Remedied, crossings_left, remedied};
+use super::assembly::{Assembled, Remedied, crossings_left, remedied};
 use super::tooth::{CutTooth, margin_pts_of, winds_once};
 use crate::cut::{self, CutMethod, CutOptions};
+use glam::DVec3;
 
 /// The steepest climb of the cut made again (height per unit of length around the tooth at the
 /// margin: 1 = 45°; see [`crate::cut::MarginHeight::new`]).
 pub(super) const FLAT_CUT_SLOPE: f64 = 1.0;
 
+/// How near (mm) to a crossing the build left the flatter cut must take CBCT surface away for
+/// the tooth to be built again on it: a cut changed only elsewhere lays the band where it
+/// crosses as before (the band reaches from the margin to the cut, ~1-2 mm).
+const NEAR_CROSSING_MM: f64 = 2.0;
+
 /// The builds and remedies of `ct` ([`remedied`]) made again on its CBCT tooth cut with the
-/// climb bounded ([`flatter_cut`]); `None` when the cut is the level-set one already bounded as
-/// much, the new cut fails or removes no more, or its builds leave no fewer crossings than
-/// `left`.
-pub(super) fn rebuilt(ct: &CutTooth, opts: &FuseOptions, left: usize) -> Option<Remedied> {
+/// climb bounded ([`flatter_cut`]), for the build `a` left crossed; `None` when the cut is the
+/// level-set one already bounded as much, the new cut fails or takes nothing away within
+/// [`NEAR_CROSSING_MM`] of a crossing `a` left, or its builds leave no fewer crossings.
+pub(super) fn rebuilt(ct: &CutTooth, opts: &FuseOptions, a: &Assembled) -> Option<Remedied> {
     let _builds = super::build_budget::Scope::start();
     if !super::build_budget::more() {
         return None;
     }
+    let left = crossings_left(a);
     let flat = flatter_cut(ct, &opts.cut)?;
+    if !cut_lower_near(ct, &flat, a) {
+        return None;
+    }
     let mut r = remedied(&flat, opts).ok()?;
     (crossings_left(&r.kept) < left).then(|| {
         r.tooth = r.tooth.or(Some(flat));
         r
+    })
+}
+
+/// Whether the root of `flat` leaves out a CBCT vertex the root of `ct` holds within
+/// [`NEAR_CROSSING_MM`] of a face of the crossing pairs `a` left.
+fn cut_lower_near(ct: &CutTooth, flat: &CutTooth, a: &Assembled) -> bool {
+    let Some(u) = &a.untangle else {
+        return false;
+    };
+    let mut kept = flat.root.source_vertex.clone();
+    kept.sort_unstable();
+    let gone: Vec<DVec3> = ct
+        .root
+        .source_vertex
+        .iter()
+        .filter(|v| kept.binary_search(v).is_err())
+        .map(|&v| ct.cbct.positions[v as usize])
+        .collect();
+    let near2 = NEAR_CROSSING_MM * NEAR_CROSSING_MM;
+    u.crossing_pairs.iter().flat_map(|&(f, g)| [f, g]).any(|f| {
+        let c = a.mesh.corners(f as usize);
+        let mid = (c[0] + c[1] + c[2]) / 3.0;
+        gone.iter().any(|p| p.distance_squared(mid) <= near2)
     })
 }
 
@@ -73,6 +107,8 @@ fn flatter_cut(ct: &CutTooth, cut_opts: &CutOptions) -> Option<CutTooth> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fuse::assembly::{assemble, cut_side};
+    use crate::fuse::untangle::UntangleReport;
     use crate::fuse::{cut_tooth, stitch_tooth};
     use crate::geom::Rigid;
     use crate::mesh::TriMesh;
@@ -124,6 +160,44 @@ mod tests {
         let q = &fused.quality;
         assert!(q.closed && q.manifold && q.components == 1, "{q:?}");
         assert_eq!(q.band_crossings_left, 0, "{q:?}");
+    }
+
+    /// A build of `ct` whose untangling left one pair: the band face whose centre lies nearest
+    /// the angle `at` (radians about z) with itself.
+    fn crossed_at(ct: &CutTooth, at: f64) -> Assembled {
+        let mut a = assemble(ct, &cut_side(ct), &FuseOptions::default()).expect("builds");
+        let off = |f: usize| {
+            let c = a.mesh.corners(f);
+            let m = (c[0] + c[1] + c[2]) / 3.0;
+            let d = (m.y.atan2(m.x) - at).rem_euclid(std::f64::consts::TAU);
+            d.min(std::f64::consts::TAU - d)
+        };
+        let f = a
+            .band
+            .clone()
+            .min_by(|&f, &g| off(f).total_cmp(&off(g)))
+            .expect("a band") as u32;
+        a.untangle = Some(UntangleReport {
+            crossings_before: 1,
+            crossings_after: 1,
+            crossing_pairs: vec![(f, f)],
+            ..UntangleReport::default()
+        });
+        a
+    }
+
+    /// The flatter cut of the notched tooth takes CBCT surface away only about the notch: a
+    /// crossing left there calls for its builds, one half a turn away does not.
+    #[test]
+    fn flatter_cut_is_built_only_for_crossings_where_it_changes_the_root() {
+        let ct = tooth(25.0, 7.5);
+        let flat = flatter_cut(&ct, &FuseOptions::default().cut).expect("a flatter cut");
+        assert!(cut_lower_near(&ct, &flat, &crossed_at(&ct, 0.0)));
+        assert!(!cut_lower_near(
+            &ct,
+            &flat,
+            &crossed_at(&ct, std::f64::consts::PI)
+        ));
     }
 
     /// No flatter cut where there is nothing to flatten (a level margin: the cut removes no
