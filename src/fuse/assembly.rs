@@ -283,7 +283,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     {
         r = w;
     }
-    // Still crossed: the crown cut made again no steeper along the margin's flanks.
+    // Still crossed: the crown cut made again climbing no steeper along the margin's flanks.
     if crossings_left(&r.kept) > 0
         && opts.fringe_reach_mm > 0.0
         && let Some(f) = super::flat_cut::rebuilt(ct, opts, &r.kept)

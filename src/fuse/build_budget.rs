@@ -16,8 +16,8 @@
 use std::cell::Cell;
 
 /// Band builds per tooth at most, over its builds and remedies as cut (and as many again for
-/// each of the last two remedies' new cuts). On the rough phantom exports and the foreign jaws a tooth takes
-/// at most 36 (median 4; a clean tooth takes one).
+/// each of the last two remedies' new cuts). On the rough phantom exports and the foreign jaws
+/// a tooth takes at most 36 (median 4; a clean tooth takes one).
 pub(super) const MAX_BUILDS: usize = 48;
 
 thread_local! {

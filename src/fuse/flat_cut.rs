@@ -1,6 +1,7 @@
-//! The remedy for a tooth whose band still crosses itself or the root after every other: the
-//! crown cut made again with its climb bounded ([`FLAT_CUT_SLOPE`]), and the tooth's builds
-//! and remedies made again on that root.
+//! The last remedy for a tooth whose band is still crossed after every other (it is meant for a
+//! band crossing itself or the root, which no crown trim helps): the crown cut made again with
+//! its climb bounded ([`FLAT_CUT_SLOPE`]), and the tooth's builds and remedies made again on
+//! that root.
 //!
 //! The level-set cut follows the margin's lowest height at each angle, less the offset. Where a
 //! labelled crown reaches up a contact (a lower incisor's label can run from the cervix nearly
@@ -97,7 +98,7 @@ fn flatter_cut(ct: &CutTooth, cut_opts: &CutOptions) -> Option<CutTooth> {
     let more = rc.removed_faces - ct.root.removed_faces;
     let mut out = ct.with_root(rc);
     out.warnings.push(format!(
-        "the band crossed itself or the root after every remedy: the crown cut made again climbing no steeper than {:.0}° along the margin ({} more CBCT faces removed) and the tooth built again",
+        "the band was still crossed after every remedy: the crown cut made again climbing no steeper than {:.0}° along the margin ({} more CBCT faces removed) and the tooth built again",
         FLAT_CUT_SLOPE.atan().to_degrees(),
         more
     ));
