@@ -109,43 +109,16 @@ fn flatter_cut(ct: &CutTooth, cut_opts: &CutOptions) -> Option<CutTooth> {
 mod tests {
     use super::*;
     use crate::fuse::assembly::{assemble, cut_side};
+    use crate::fuse::stitch_tooth;
+    use crate::fuse::test_teeth::ellipsoid_tooth;
     use crate::fuse::untangle::UntangleReport;
-    use crate::fuse::{cut_tooth, stitch_tooth};
-    use crate::geom::Rigid;
-    use crate::mesh::TriMesh;
-    use crate::mesh::fixtures::ellipsoid;
-
-    /// A tooth standing along z (a CBCT ellipsoid) and, as the IOS crown, the top of a finer
-    /// one above z = 4, or above z = `notch_top` within `notch_deg` of +x: a crown whose label
-    /// climbs a contact's flank there (vertically).
-    fn tooth(notch_deg: f64, notch_top: f64) -> CutTooth {
-        let cbct = ellipsoid(40, 48, 4.0, 10.0);
-        let fine = ellipsoid(80, 96, 4.0, 10.0);
-        let keep = |v: u32| {
-            let p = fine.positions[v as usize];
-            let at = p.y.atan2(p.x).to_degrees().abs();
-            p.z > if at < notch_deg { notch_top } else { 4.0 }
-        };
-        let mut crown = TriMesh::new(
-            fine.positions.clone(),
-            fine.triangles
-                .iter()
-                .copied()
-                .filter(|t| t.iter().all(|&v| keep(v)))
-                .collect(),
-        );
-        crown.compact();
-        let opts = FuseOptions::default();
-        cut_tooth(11, &crown, &cbct, &Rigid::IDENTITY, &Rigid::IDENTITY, &opts)
-            .expect("the ellipsoid tooth cuts")
-    }
 
     /// Where the margin climbs 3.5 mm up a 50° notch, the cut made again climbs no steeper: it
     /// removes more of the CBCT tooth, its loop goes once around the tooth, it says so, and the
     /// tooth built on it is closed and manifold with no crossing left.
     #[test]
     fn steep_margin_is_cut_again_lower() {
-        let ct = tooth(25.0, 7.5);
+        let ct = ellipsoid_tooth(25.0, 7.5);
         let opts = FuseOptions::default();
         let flat = flatter_cut(&ct, &opts.cut).expect("a flatter cut");
         assert!(flat.root.removed_faces > ct.root.removed_faces);
@@ -191,7 +164,7 @@ mod tests {
     /// crossing left there calls for its builds, one half a turn away does not.
     #[test]
     fn flatter_cut_is_built_only_for_crossings_where_it_changes_the_root() {
-        let ct = tooth(25.0, 7.5);
+        let ct = ellipsoid_tooth(25.0, 7.5);
         let flat = flatter_cut(&ct, &FuseOptions::default().cut).expect("a flatter cut");
         assert!(cut_lower_near(&ct, &flat, &crossed_at(&ct, 0.0)));
         assert!(!cut_lower_near(
@@ -206,8 +179,8 @@ mod tests {
     #[test]
     fn no_flatter_cut_where_it_changes_nothing() {
         let opts = FuseOptions::default();
-        assert!(flatter_cut(&tooth(0.0, 4.0), &opts.cut).is_none());
-        let ct = tooth(25.0, 7.5);
+        assert!(flatter_cut(&ellipsoid_tooth(0.0, 4.0), &opts.cut).is_none());
+        let ct = ellipsoid_tooth(25.0, 7.5);
         let dijkstra = CutOptions {
             method: CutMethod::Dijkstra,
             ..opts.cut

@@ -18,6 +18,8 @@ pub mod quality;
 mod remedy;
 mod root_trim;
 mod skipped;
+#[cfg(test)]
+mod test_teeth;
 mod tooth;
 pub mod untangle;
 

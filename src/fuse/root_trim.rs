@@ -106,31 +106,10 @@ fn root_trimmed(ct: &CutTooth, a: &Assembled) -> Option<CutTooth> {
 mod tests {
     use super::*;
     use crate::fuse::assembly::{assemble, cut_side};
+    use crate::fuse::stitch_tooth;
+    use crate::fuse::test_teeth::ellipsoid_tooth;
     use crate::fuse::untangle::UntangleReport;
-    use crate::fuse::{cut_tooth, stitch_tooth};
-    use crate::geom::Rigid;
     use crate::mesh::EdgeTopology;
-    use crate::mesh::fixtures::ellipsoid;
-
-    /// A tooth standing along z: a CBCT ellipsoid and, as the IOS crown, the top of a finer one.
-    fn ellipsoid_tooth() -> (TriMesh, CutTooth) {
-        let cbct = ellipsoid(40, 48, 4.0, 10.0);
-        let fine = ellipsoid(80, 96, 4.0, 10.0);
-        let above = |v: u32| fine.positions[v as usize].z > 4.0;
-        let mut crown = TriMesh::new(
-            fine.positions.clone(),
-            fine.triangles
-                .iter()
-                .copied()
-                .filter(|t| t.iter().all(|&v| above(v)))
-                .collect(),
-        );
-        crown.compact();
-        let opts = FuseOptions::default();
-        let ct = cut_tooth(11, &crown, &cbct, &Rigid::IDENTITY, &Rigid::IDENTITY, &opts)
-            .expect("the ellipsoid tooth cuts");
-        (cbct, ct)
-    }
 
     /// A build of `ct` whose untangling left its first band face crossing the root faces `hit`
     /// (indices into the root) and, with `crown_face`, crown face 0 too.
@@ -160,7 +139,8 @@ mod tests {
     /// face in any pair, leaves the root as it is.
     #[test]
     fn root_faces_the_band_crosses_are_peeled_from_the_cut() {
-        let (cbct, ct) = ellipsoid_tooth();
+        let ct = ellipsoid_tooth(0.0, 4.0);
+        let cbct = &ct.cbct;
         let root = &ct.root.root;
         let topo = EdgeTopology::new(root);
         let on_cut: Vec<u32> = (0..root.triangles.len() as u32)
