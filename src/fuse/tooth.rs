@@ -462,7 +462,7 @@ fn cut_root(
     }
     // The margin's best-fit plane normal is the tooth axis where the margin is a ring around the
     // tooth; a narrow, deeply scalloped or ragged margin can tilt it far off (a lower incisor
-    // whose labelled crown reaches the incisal edge at a contact: 89.5°), and then the cut about
+    // whose labelled crown reaches the incisal edge at a contact: 82°), and then the cut about
     // it fails or does not go around the tooth. Such a cut is made again about the CBCT tooth's
     // long axis, whatever the tilt (a tooth that cuts well keeps its margin frame: a molar's long
     // axis can lie across it; and a tooth whose cut fails has nothing to lose).
