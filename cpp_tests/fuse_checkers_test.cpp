@@ -136,9 +136,11 @@ struct CrownLimits {
   double maxTrimShare;
   size_t maxBandCrossings;
   bool dropsAllowed;  // stray tooth-labelled islands the crown repair gives back to the gingiva
+  double maxTrimReach;  // mm from the margin (the default fringe reaches 0.3 mm)
 };
-// The contract on the clean phantom: at most 0.5 % trimmed, no crossing added, nothing dropped.
-constexpr CrownLimits kClean{0.005, 0, false};
+// The contract on the clean phantom: at most 0.5 % trimmed within 0.3 mm of the margin, no
+// crossing added, nothing dropped.
+constexpr CrownLimits kClean{0.005, 0, false, 0.3};
 
 // Every IOS crown vertex of the session, mapped by IOS->output, is a source-IOS vertex (to
 // 1e-9 mm: the library applies the same transform in Rust), except the ones the library reports
@@ -180,7 +182,8 @@ std::string crown_check(tf::Session& s, int32_t fdi, const Fused& f,
   if (missing != trimmed + dropped)
     return std::to_string(missing) + " IOS crown vertices missing, " + std::to_string(trimmed) +
            " reported trimmed, " + std::to_string(dropped) + " dropped; ";
-  if (reach > 0.3 || static_cast<double>(trimmed) > lim.maxTrimShare * (crown.size() / 3))
+  if (reach > lim.maxTrimReach ||
+      static_cast<double>(trimmed) > lim.maxTrimShare * (crown.size() / 3))
     return "trimmed " + std::to_string(trimmed) + " of " + std::to_string(crown.size() / 3) +
            " vertices up to " + std::to_string(reach) + " mm from the margin; ";
   // No crossing added by the fusion (the contract on clean crowns), as the library counts it.
@@ -277,9 +280,12 @@ TEST(FuseCheckers, EveryToothOfTwentySyntheticJawsIsClosedAndManifold) {
 // the margin) or dropped (label-noise islands apart from the crown), and no crossing pair the
 // fusion added left (with a band face or a face added to the crown; the library's exact count,
 // as the Rust test fuse_rough asserts on 20 rough jaws). Measured: the coarse crowns lose up to
-// ~7 % of their vertices to the fringe trim (the 0.5 % of the clean contract is not met there).
+// ~7 % of their vertices to the fringe trim (the 0.5 % of the clean contract is not met there),
+// and where the band still crosses the crown after the 0.3 mm fringe, the wider fringe (0.6,
+// then 0.9 mm) trims a few teeth farther (fuse_rough: 12 teeth of 20 jaws, up to 0.52 mm); as
+// there, at most 0.9 mm and at most 2 teeth per jaw beyond 0.3 mm.
 TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
-  const CrownLimits rough{0.08, 30, true};
+  const CrownLimits rough{0.08, 30, true, 0.9};
   size_t jaws = 0, teeth = 0, crossings = 0, trimmedTeeth = 0;
   for (const std::string& jd : demo_jaw_dirs("TOOTHFUSE_ROUGH_JAWS_DIR", "rough_jaws")) {
     tf::Session s;
@@ -288,6 +294,7 @@ TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
     fuse_demo_jaw(s, jd, fdis, notFused);
     if (HasFatalFailure()) return;
     jaws++;
+    size_t widened = 0;
     for (const auto& [f, why] : notFused)
       EXPECT_NE(why.rfind("fusion failed", 0), 0u) << jd << ": tooth " << f << " lost: " << why;
     for (size_t i = 0; i < fdis.size(); i++) {
@@ -302,8 +309,10 @@ TEST(FuseCheckers, RoughExportsAreClosedManifoldAndKeepTheirCrowns) {
                 TOOTHFUSE_STATUS_OK);
       crossings += band;
       trimmedTeeth += trimmed > 0;
+      widened += reach > 0.3;
       teeth++;
     }
+    EXPECT_LE(widened, 2u) << jd << ": teeth trimmed beyond 0.3 mm of the margin";
   }
   std::printf("rough exports: %zu fused teeth of %zu jaws, %zu with trimmed fringe vertices, %zu "
               "crossing pairs added by the fusion left in all\n",
