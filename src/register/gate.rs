@@ -87,7 +87,10 @@ pub struct ToothEvidence {
     pub fdi: u8,
     /// Median distance (mm) of its IOS sample to its own CBCT tooth after the jaw-wide fit.
     pub own_fit_mm: f64,
-    /// The CBCT tooth (other than its own) its IOS crown fits best, with that median distance.
+    /// The CBCT tooth (other than its own, up to two places along the arch) its IOS crown fits
+    /// best, with that median distance; looked for only where it can decide, when the crown
+    /// lies farther than 1 mm (median) from its own CBCT tooth (`None` otherwise, and where no
+    /// such tooth is in the CBCT).
     pub best_other: Option<(u8, f64)>,
     /// How far (mm, at the crown) an independent rigid fit of this tooth moves it from the
     /// jaw-wide fit.
@@ -164,12 +167,14 @@ fn sample(d: &ToothData, n: usize) -> Vec<DVec3> {
         .collect()
 }
 
+/// The element at index `len / 2` of `v` sorted by `total_cmp` (the upper median), found by
+/// selection instead of a sort; infinite for an empty `v`.
 fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::INFINITY;
     }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 fn mean(p: &[DVec3]) -> DVec3 {
@@ -484,8 +489,10 @@ fn tooth_evidence(
             cbct: p.cbct,
             ios: sample(&teeth[&p.fdi], TOOTH_SAMPLE),
         };
+        // Only a crown that misfits its own tooth can be misnumbered ([`misnumbered`]): the
+        // other teeth's fits (four searches of the crown sample each) are made for it alone.
         let best_other = (-2..=2)
-            .filter(|&s| s != 0)
+            .filter(|&s| s != 0 && own_fit_mm > TOOTH_MISFIT_MM)
             .filter_map(|s| along_arch(p.fdi, s))
             .filter_map(|f| Some((f, fit_of(&teeth.get(&f)?.cbct, &p.ios, t))))
             .min_by(|a, b| a.1.total_cmp(&b.1));
@@ -538,4 +545,47 @@ fn roughness(ev: &[ToothEvidence]) -> f64 {
             })
             .collect(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median;
+
+    /// The selection gives bitwise the element a full sort puts at `len / 2`, with repeated
+    /// values, signed zeros, infinities and NaNs among the inputs.
+    #[test]
+    fn median_is_the_sorted_middle_element() {
+        let mut s: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let specials = [
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1.5,
+            1.5,
+        ];
+        for len in 0..200usize {
+            let v: Vec<f64> = (0..len)
+                .map(|_| {
+                    let r = next();
+                    if r % 5 == 0 {
+                        specials[(r >> 8) as usize % specials.len()]
+                    } else {
+                        ((r >> 11) % 50) as f64 * 0.01 - 0.2
+                    }
+                })
+                .collect();
+            let mut sorted = v.clone();
+            sorted.sort_by(f64::total_cmp);
+            let want = sorted.get(len / 2).copied().unwrap_or(f64::INFINITY);
+            assert_eq!(median(v).to_bits(), want.to_bits(), "len {len}");
+        }
+    }
 }
