@@ -1,6 +1,7 @@
 //! Indexed triangle meshes in f64: construction from caller buffers, validation, topology
 //! (edges, boundary loops, components), measures (normals, volume) and label splitting.
 
+mod boundary;
 mod buffers;
 mod fan_pass;
 mod hole_cap;

@@ -179,7 +179,7 @@ impl EdgeTopology {
 
 /// Where each vertex's half-edges start in the sorted list, from the origin of every half-edge
 /// (one entry per vertex up to the highest origin, and one more: the count).
-fn origin_offsets(origins: impl Iterator<Item = u32> + Clone) -> Vec<u32> {
+pub(super) fn origin_offsets(origins: impl Iterator<Item = u32> + Clone) -> Vec<u32> {
     let n = origins.clone().map(|v| v as usize + 1).max().unwrap_or(0);
     let mut offsets = vec![0u32; n + 1];
     for v in origins {
@@ -194,7 +194,7 @@ fn origin_offsets(origins: impl Iterator<Item = u32> + Clone) -> Vec<u32> {
 /// `items` in a stable counting sort by `vertex(item)`, whose runs start at `offsets` (one
 /// more entry than vertices; the last the item count): each vertex's items in their order in
 /// `items`.
-fn placed_by<K: Copy + Default>(
+pub(super) fn placed_by<K: Copy + Default>(
     items: impl Iterator<Item = K>,
     offsets: &[u32],
     vertex: impl Fn(&K) -> u32,
@@ -214,12 +214,16 @@ fn placed_by<K: Copy + Default>(
 /// length, longest first (ties: by smallest vertex). Assumes a manifold mesh; at a boundary
 /// vertex shared by two loops the walk takes the first unused edge in sorted order.
 pub fn boundary_loops(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    boundary_loops_of(&EdgeTopology::new(mesh))
+    loops_of_edges(&super::boundary::boundary_half_edges(&mesh.triangles))
 }
 
 /// [`boundary_loops`] from an already built topology.
 pub fn boundary_loops_of(topo: &EdgeTopology) -> Vec<Vec<u32>> {
-    let edges = topo.boundary_half_edges();
+    loops_of_edges(&topo.boundary_half_edges())
+}
+
+/// The loops of the sorted boundary half-edges `edges` (see [`boundary_loops`]).
+fn loops_of_edges(edges: &[(u32, u32)]) -> Vec<Vec<u32>> {
     let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();
     for start in 0..edges.len() {
