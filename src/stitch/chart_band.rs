@@ -408,31 +408,18 @@ mod tests {
         let band = build_band(&loops, &frame, &StitchOptions::default())
             .expect("band")
             .band;
-        let used = |want: fn(BandVertex) -> Option<u32>, n: usize| {
-            let mut seen = vec![false; n];
-            for v in band.triangles.iter().flatten() {
-                if let Some(i) = want(*v) {
-                    seen[i as usize] = true;
-                }
+        let (mut up, mut lo) = (vec![false; upper.len()], vec![false; lower.len()]);
+        for v in band.triangles.iter().flatten() {
+            match *v {
+                BandVertex::Upper(i) => up[i as usize] = true,
+                BandVertex::Lower(i) => lo[i as usize] = true,
+                BandVertex::Interior(_) => {}
             }
-            seen.iter().all(|&s| s)
-        };
-        assert!(used(
-            |v| if let BandVertex::Upper(i) = v {
-                Some(i)
-            } else {
-                None
-            },
-            upper.len()
-        ));
-        assert!(used(
-            |v| if let BandVertex::Lower(i) = v {
-                Some(i)
-            } else {
-                None
-            },
-            lower.len()
-        ));
+        }
+        assert!(
+            up.iter().chain(&lo).all(|&s| s),
+            "a loop vertex not in the band"
+        );
         let p = &band.points;
         let mut closest = f64::INFINITY;
         for i in 0..p.len() {
