@@ -106,12 +106,7 @@ pub(super) fn cut_side(ct: &CutTooth) -> CrownSide {
         crown: ct.crown.clone(),
         margin: ct.margin.clone(),
         dirs: ct.crown_dirs.clone(),
-        chords: ct
-            .chords
-            .iter()
-            .copied()
-            .filter(|c| matches!(c.0, BandVertex::Upper(_)))
-            .collect(),
+        chords: ct.crown_chords().collect(),
         ios_vertex: ct.ios_vertex.clone(),
     }
 }

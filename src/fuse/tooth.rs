@@ -186,15 +186,20 @@ impl CutTooth {
         CutTooth {
             root_dirs: loop_dirs(&rc.root, &rc.cut_loop, self.frame.axis),
             chords: self
-                .chords
-                .iter()
-                .copied()
-                .filter(|c| matches!(c.0, BandVertex::Upper(_)))
+                .crown_chords()
                 .chain(loop_chords(&rc.root, &rc.cut_loop, BandVertex::Lower))
                 .collect(),
             root: rc,
             ..self.clone()
         }
+    }
+
+    /// The chords of the crown's margin.
+    pub(super) fn crown_chords(&self) -> impl Iterator<Item = (BandVertex, BandVertex)> + '_ {
+        self.chords
+            .iter()
+            .copied()
+            .filter(|c| matches!(c.0, BandVertex::Upper(_)))
     }
 
     /// The chords of the root's cut loop (the crown's are the crown side's).
