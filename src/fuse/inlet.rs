@@ -8,6 +8,8 @@
 //! edge the crown already has; every other inlet is left to the fringe trim and the band.
 
 use crate::mesh::{EdgeTopology, TriMesh, boundary_loops};
+use crate::mesh_check::{TriangleGrid, face_box, triangles_intersect};
+use glam::DVec3;
 
 /// Widest inlet mouth (mm) closed: a slit, far narrower than an interproximal notch the band
 /// can follow (1.1-1.8 mm across).
@@ -46,9 +48,12 @@ pub fn close_inlets(crown: &mut TriMesh) -> InletReport {
             break;
         }
         let topo = EdgeTopology::new(crown);
-        let closed = candidates
-            .into_iter()
-            .find_map(|(i, j, len)| zip(crown, &topo, lp, i, j).map(|faces| (faces, len)));
+        // The crown does not change while candidate strips are tested against it: its faces
+        // are binned once, when a first strip gets as far as the crossing test.
+        let mut near = None;
+        let closed = candidates.into_iter().find_map(|(i, j, len)| {
+            zip(crown, &topo, &mut near, lp, i, j).map(|faces| (faces, len))
+        });
         let Some((faces, len)) = closed else {
             break;
         };
@@ -90,14 +95,62 @@ fn inlets(crown: &TriMesh, lp: &[u32]) -> Vec<(usize, usize, f64)> {
     out
 }
 
+/// The crown's faces binned on a grid, with their boxes: what a strip is tested against.
+struct CrownFaces {
+    grid: TriangleGrid,
+    boxes: Vec<(DVec3, DVec3)>,
+}
+
+impl CrownFaces {
+    fn new(crown: &TriMesh) -> CrownFaces {
+        CrownFaces {
+            grid: TriangleGrid::new(crown, 0.0),
+            boxes: (0..crown.triangles.len())
+                .map(|f| face_box(crown, f))
+                .collect(),
+        }
+    }
+}
+
+/// Whether a face of `strip` (faces of `crown` appended after the faces `near` holds) crosses a
+/// crown face or another strip face (exact test; the pairs whose boxes overlap, as
+/// [`crate::mesh_check::crossing_pairs`] of the strip tests them).
+fn strip_crosses(crown: &TriMesh, strip: std::ops::Range<usize>, near: &CrownFaces) -> bool {
+    let boxes: Vec<(DVec3, DVec3)> = strip.clone().map(|f| face_box(crown, f)).collect();
+    let overlap =
+        |(l, h): (DVec3, DVec3), (gl, gh): (DVec3, DVec3)| gl.cmple(h).all() && l.cmple(gh).all();
+    let mut around = Vec::new();
+    for (k, f) in strip.clone().enumerate() {
+        around.clear();
+        near.grid
+            .for_each_in_box(boxes[k].0, boxes[k].1, |g| around.push(g));
+        around.sort_unstable();
+        around.dedup();
+        let crosses_crown = around.iter().any(|&g| {
+            overlap(boxes[k], near.boxes[g as usize]) && triangles_intersect(crown, f, g as usize)
+        });
+        let crosses_strip = strip
+            .clone()
+            .enumerate()
+            .skip(k + 1)
+            .any(|(j, g)| overlap(boxes[k], boxes[j]) && triangles_intersect(crown, f, g));
+        if crosses_crown || crosses_strip {
+            return true;
+        }
+    }
+    false
+}
+
 /// The strip closing the inlet of loop `lp` from position `i` to `j`: the two sides zipped from
 /// the mouth inwards, each step advancing the side whose next diagonal is shorter. `None` when
 /// the loop passes one of the inlet's vertices twice, a diagonal is already an edge of the
 /// crown, or a strip face crosses the crown (or another strip face). The crown is left as it
-/// was (the strip is appended to test it, then removed).
+/// was (the strip is appended to test it, then removed); `near` holds the crown's faces binned,
+/// made here on first need.
 fn zip(
     crown: &mut TriMesh,
     topo: &EdgeTopology,
+    near: &mut Option<CrownFaces>,
     lp: &[u32],
     i: usize,
     j: usize,
@@ -149,10 +202,10 @@ fn zip(
         return None;
     }
     // The strip is tested in place: appended to the crown, then taken off again.
+    let near = near.get_or_insert_with(|| CrownFaces::new(crown));
     let first = crown.triangles.len();
     crown.triangles.extend_from_slice(&faces);
-    let strip: Vec<u32> = (first as u32..crown.triangles.len() as u32).collect();
-    let crossed = !super::fringe::crossing_pairs(crown, &strip).is_empty();
+    let crossed = strip_crosses(crown, first..crown.triangles.len(), near);
     crown.triangles.truncate(first);
     (!crossed).then_some(faces)
 }
@@ -193,6 +246,55 @@ mod tests {
                 (m.positions[l[k] as usize] - m.positions[l[(k + 1) % l.len()] as usize]).length()
             })
             .sum()
+    }
+
+    /// The strip test on the crown's binned faces answers as the search of every face does
+    /// (`crossing_pairs` of the strip), on random strips over a jittered grid: strips of 1-6
+    /// faces on vertices floating over it and on its own vertices, some crossing it or each
+    /// other, some clear.
+    #[test]
+    fn a_strip_crosses_the_binned_crown_exactly_when_the_full_search_says_so() {
+        let mut rng = crate::phantom::rng::Rng::new(11);
+        let mut m = slit_grid(14, 0.25, 6, 7);
+        for p in &mut m.positions {
+            *p += DVec3::new(0.0, 0.0, rng.range(-0.12, 0.12));
+        }
+        let on_grid = m.positions.len();
+        for _ in 0..80 {
+            let (x, y) = (rng.range(0.0, 3.25), rng.range(0.0, 3.25));
+            m.positions.push(DVec3::new(x, y, rng.range(0.15, 0.5)));
+        }
+        let near = CrownFaces::new(&m);
+        let (mut crossing, mut clear) = (0, 0);
+        for _ in 0..600 {
+            let first = m.triangles.len();
+            for _ in 0..1 + rng.below(6) {
+                let mut pick = || {
+                    if rng.below(4) == 0 {
+                        rng.below(on_grid) as u32
+                    } else {
+                        (on_grid + rng.below(80)) as u32
+                    }
+                };
+                let t = [pick(), pick(), pick()];
+                if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+                    m.triangles.push(t);
+                }
+            }
+            let strip: Vec<u32> = (first as u32..m.triangles.len() as u32).collect();
+            let full = !crate::mesh_check::crossing_pairs(&m, &strip).is_empty();
+            assert_eq!(strip_crosses(&m, first..m.triangles.len(), &near), full);
+            if full {
+                crossing += 1;
+            } else if !strip.is_empty() {
+                clear += 1;
+            }
+            m.triangles.truncate(first);
+        }
+        assert!(
+            crossing > 50 && clear > 50,
+            "{crossing} crossing, {clear} clear"
+        );
     }
 
     #[test]
@@ -278,7 +380,7 @@ mod tests {
         // The inlet close_inlets zips: the first candidate whose strip is valid.
         let (i, j, _) = inlets(&m, &lp)
             .into_iter()
-            .find(|&(i, j, _)| zip(&mut m, &topo, &lp, i, j).is_some())
+            .find(|&(i, j, _)| zip(&mut m, &topo, &mut None, &lp, i, j).is_some())
             .expect("the slit can be zipped");
         assert_eq!(m, before, "the crown is left as it was");
         // The same loop passing the slit's innermost vertex once more away from the slit, as a
@@ -296,7 +398,7 @@ mod tests {
             (j + n - i) % n,
             "the inlet's side is the same"
         );
-        assert!(zip(&mut m, &topo, &pinched, pi, pj).is_none());
+        assert!(zip(&mut m, &topo, &mut None, &pinched, pi, pj).is_none());
         assert_eq!(m, before);
     }
 }
