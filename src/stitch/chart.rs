@@ -380,7 +380,7 @@ const OVER_RELAXATION: f64 = 1.5;
 
 /// Harmonic interpolation over a triangulation in chart coordinates: `values[i]` is kept where
 /// `fixed[i]`, the others solve the discrete Laplace equation (cotangent weights, clamped
-/// positive) by over-relaxed Gauss–Seidel sweeps (`OVER_RELAXATION`) in index order
+/// positive) by over-relaxed Gauss–Seidel sweeps ([`OVER_RELAXATION`]) in index order
 /// (deterministic) until no value moves by 1e-7.
 pub fn harmonic(
     chart: &[[f64; 2]],
