@@ -371,17 +371,9 @@ impl Lift {
     }
 }
 
-/// Over-relaxation factor of the harmonic solve's sweeps. Plain Gauss–Seidel (1.0) took 70-90
-/// sweeps on a clean phantom band and 120-190 on a rough one to settle to 1e-7; with 1.5 it
-/// takes 22-30 and ~50, and ends nearer the exact solution (measured against sweeps to 1e-14:
-/// at most 0.02-0.2 µm off on clean bands and 0.4 µm on rough ones, against 0.6-1 µm and
-/// 1.6 µm). Larger factors (1.7, 1.8) took more sweeps again.
-const OVER_RELAXATION: f64 = 1.5;
-
 /// Harmonic interpolation over a triangulation in chart coordinates: `values[i]` is kept where
 /// `fixed[i]`, the others solve the discrete Laplace equation (cotangent weights, clamped
-/// positive) by over-relaxed Gauss–Seidel sweeps ([`OVER_RELAXATION`]) in index order
-/// (deterministic) until no value moves by 1e-7.
+/// positive) by Gauss–Seidel sweeps in index order (deterministic).
 pub fn harmonic(
     chart: &[[f64; 2]],
     period: f64,
@@ -442,7 +434,7 @@ pub fn harmonic(
                 s += w * values[j as usize];
                 ws += w;
             }
-            let v = values[i] + OVER_RELAXATION * (s / ws - values[i]);
+            let v = s / ws;
             change = change.max((v - values[i]).abs());
             values[i] = v;
         }
