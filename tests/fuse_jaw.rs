@@ -77,6 +77,17 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
     }
     assert_eq!(fused.labels.len(), fused.mesh.positions.len());
     assert_eq!(fused.source.len(), fused.mesh.positions.len());
+    let rebuilt: Vec<(u8, usize)> = fused
+        .teeth
+        .iter()
+        .filter(|(_, f)| f.band_builds > 1)
+        .map(|(&fdi, f)| (fdi, f.band_builds))
+        .collect();
+    // Measured: one tooth of these 10 clean jaws (seed 4 lower 34, 3 builds, its fold trimmed).
+    assert!(
+        rebuilt.len() <= 1,
+        "{tag}: teeth built more than once: {rebuilt:?}"
+    );
     let mut out = Vec::new();
     for (&fdi, f) in &fused.teeth {
         let q = &f.quality;
@@ -87,6 +98,20 @@ fn run(seed: u64, jaw: Jaw, variant: Variant, preset: Preset) -> Vec<(u8, Accura
         // flipped away (`fix_degenerate_band`), in both presets none is left.
         assert_eq!(q.degenerate_faces, 0, "{tag}: tooth {fdi}");
         assert!(q.self_intersections.is_some(), "{tag}: tooth {fdi}");
+        // The paper preset has no margin fringe and so no remedy: one band build per tooth. The
+        // default rebuilds only a tooth whose first band crosses the crown or itself, which on
+        // these relaxed, cleaned phantom crowns is rare (asserted per jaw above).
+        if preset == Preset::Paper {
+            assert_eq!(f.band_builds, 1, "{tag}: tooth {fdi}");
+        } else {
+            // A tooth is built again only where its band crossed the crown, whose fringe was
+            // then trimmed.
+            assert!(
+                f.band_builds == 1 || q.ios_vertices_trimmed > 0,
+                "{tag}: tooth {fdi}: {} builds, nothing trimmed",
+                f.band_builds
+            );
+        }
         let crown = &crowns[&fdi];
         let t = &transforms[&fdi];
         let mut seen = vec![false; crown.positions.len()];

@@ -269,6 +269,7 @@ pub(super) fn remedied(ct: &CutTooth, opts: &FuseOptions) -> Result<Remedied> {
 
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
+    let builds_before = super::build_budget::all_made();
     let _builds = super::build_budget::Scope::start();
     let mut r = remedied(ct, opts)?;
     // Still crossed after every remedy: the cut's fold trim made again reaching farther.
@@ -375,6 +376,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         warnings,
         cut_ms: ct.cut_ms,
         stitch_ms,
+        band_builds: super::build_budget::all_made() - builds_before,
     })
 }
 

@@ -40,6 +40,10 @@ pub struct FusedTooth {
     pub cut_ms: f64,
     /// See [`FusedTooth::cut_ms`].
     pub stitch_ms: f64,
+    /// Band builds made for this tooth over every remedy (one for a crown whose first band
+    /// crosses nothing; rough and foreign crowns take several: see the margin fringe in the
+    /// README). How hard the tooth was, not a quality measure.
+    pub band_builds: usize,
 }
 
 impl FusedTooth {

@@ -28,7 +28,9 @@ impl Drop for Limit {
 fn stitched(ct: &CutTooth) -> (FusedTooth, usize, usize) {
     let all = ALL.with(Cell::get);
     let f = stitch_tooth(ct, &FuseOptions::default()).expect("the tooth stitches");
-    (f, LAST.with(Cell::get), ALL.with(Cell::get) - all)
+    let all = ALL.with(Cell::get) - all;
+    assert_eq!(f.band_builds, all, "tooth {}: builds reported", ct.fdi);
+    (f, LAST.with(Cell::get), all)
 }
 
 #[test]
