@@ -555,13 +555,7 @@ mod tests {
     /// values, signed zeros, infinities and NaNs among the inputs.
     #[test]
     fn median_is_the_sorted_middle_element() {
-        let mut s: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
+        let mut rng = crate::phantom::rng::Rng::new(7);
         let specials = [
             0.0,
             -0.0,
@@ -574,8 +568,8 @@ mod tests {
         for len in 0..200usize {
             let v: Vec<f64> = (0..len)
                 .map(|_| {
-                    let r = next();
-                    if r % 5 == 0 {
+                    let r = rng.next_u64();
+                    if r.is_multiple_of(5) {
                         specials[(r >> 8) as usize % specials.len()]
                     } else {
                         ((r >> 11) % 50) as f64 * 0.01 - 0.2
