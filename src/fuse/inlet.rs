@@ -7,6 +7,7 @@
 //! across its mouth. An inlet is closed only when the strip crosses no crown face and adds no
 //! edge the crown already has; every other inlet is left to the fringe trim and the band.
 
+use super::band_crossings::overlap;
 use crate::mesh::{EdgeTopology, TriMesh, boundary_loops};
 use crate::mesh_check::{TriangleGrid, face_box, triangles_intersect};
 use glam::DVec3;
@@ -117,8 +118,6 @@ impl CrownFaces {
 /// [`crate::mesh_check::crossing_pairs`] of the strip tests them).
 fn strip_crosses(crown: &TriMesh, strip: std::ops::Range<usize>, near: &CrownFaces) -> bool {
     let boxes: Vec<(DVec3, DVec3)> = strip.clone().map(|f| face_box(crown, f)).collect();
-    let overlap =
-        |(l, h): (DVec3, DVec3), (gl, gh): (DVec3, DVec3)| gl.cmple(h).all() && l.cmple(gh).all();
     let mut around = Vec::new();
     for (k, f) in strip.clone().enumerate() {
         around.clear();
