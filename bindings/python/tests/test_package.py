@@ -286,11 +286,50 @@ def test_a_cancel_raises_cancelled_and_the_session_keeps_its_results():
         assert s.fuse() == teeth
 
 
+def test_a_fuse_runs_where_sigint_is_ignored_or_a_hosts_own():
+    """Without a progress callback and where Ctrl-C is not Python's (ignored, as under nohup or
+    a shell's background job, or a host's own handler), the call runs unwatched: the same jaw
+    as under Python's handler, the process's handler left in place."""
+    import signal
+    args = _demo_args()
+    plain = toothfuse.fuse(*args)
+    before = signal.getsignal(signal.SIGINT)
+
+    def hosts(*_):
+        pass
+
+    try:
+        for handler in (signal.SIG_IGN, hosts):
+            signal.signal(signal.SIGINT, handler)
+            r = toothfuse.fuse(*args)
+            assert signal.getsignal(signal.SIGINT) is handler
+            assert r.teeth == plain.teeth and len(r.teeth) >= 3
+            assert r.positions.tobytes() == plain.positions.tobytes()
+            with toothfuse.Session() as s:
+                s.add_jaw(toothfuse.IOS, *args[:3])
+                s.add_jaw(toothfuse.CBCT, *args[3:])
+                s.fuse()
+                assert s.fused_teeth() == plain.teeth
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def test_ctrl_c_cancels_a_running_fuse_without_a_callback():
     import _thread
+    import signal
     import threading
     import time
     args = _demo_args()
+    # Python's own Ctrl-C handler, whatever the test runner was started under (a background
+    # job ignores SIGINT, and interrupt_main then does nothing).
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _ctrl_c_cancels(args, _thread, threading, time)
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def _ctrl_c_cancels(args, _thread, threading, time):
     with toothfuse.Session() as s:
         s.add_jaw(toothfuse.IOS, *args[:3])
         s.add_jaw(toothfuse.CBCT, *args[3:])

@@ -157,6 +157,7 @@ _set_threads = _fn("toothfuse_session_set_max_threads", _st, _S, ctypes.c_uint32
 _PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_uint32, ctypes.c_size_t,
                                 ctypes.c_size_t)
 _set_progress = _fn("toothfuse_session_set_progress", _st, _S, _PROGRESS_FN, ctypes.c_void_p)
+_NO_PROGRESS = _PROGRESS_FN()
 _remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
 _count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
 _list = _fn("toothfuse_session_list_teeth", _st, _S, ctypes.c_uint32, _i32_p, ctypes.c_size_t,
@@ -338,7 +339,8 @@ class Session:
             previous = signal.signal(signal.SIGINT, lambda *_: progress.__setitem__(2, True))
         try:
             watched = progress[0] is not None or previous is not None
-            self._check(_set_progress(self._h, self._trampoline if watched else None, None))
+            # No callback: a null function pointer (ctypes refuses None for a CFUNCTYPE).
+            self._check(_set_progress(self._h, self._trampoline if watched else _NO_PROGRESS, None))
             st = fn(self._h, *args)
         finally:
             if previous is not None:
