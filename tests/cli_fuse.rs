@@ -626,3 +626,39 @@ fn rough_jaw_crossed_faces_off_the_margin_are_reached() {
         &["--seed", "7", "--jaw", "upper", "--ios-export", "rough"],
     );
 }
+
+/// A coarse upper jaw with stitching drift fused from the command line, whose incisors' margin
+/// trims go round a cycle: their remedies ask for builds from crown sides they built from
+/// before. Those builds are reused, not made again, and `report.json` counts both per tooth;
+/// every tooth is fused with no crossing added, and a tooth with one build reuses none.
+#[test]
+fn coarse_upper_jaw_reuses_the_builds_its_remedies_ask_for_again() {
+    let r = fused_without_band_crossings(
+        "coarse_upper_reused_builds",
+        &[
+            "--seed",
+            "53",
+            "--jaw",
+            "upper",
+            "--variant",
+            "drift",
+            "--ios-export",
+            "coarse",
+        ],
+    );
+    let count =
+        |t: &serde_json::Value, k: &str| t[k].as_u64().unwrap_or_else(|| panic!("{k}: {t}"));
+    let mut reusing = Vec::new();
+    for t in r["teeth"].as_array().unwrap() {
+        let (made, reused) = (count(t, "band_builds"), count(t, "band_builds_reused"));
+        assert!(made >= 1, "{t}");
+        assert!(made > 1 || reused == 0, "{t}");
+        if reused > 0 {
+            reusing.push(t["fdi"].as_u64().unwrap());
+        }
+    }
+    assert!(
+        reusing.contains(&12) && reusing.contains(&22),
+        "teeth reusing builds: {reusing:?}"
+    );
+}

@@ -1,4 +1,4 @@
-//! Registration accuracy against the synthetic jaw's ground truth (issue 3, "what it must show").
+//! Registration accuracy against the synthetic jaw's ground truth.
 //!
 //! One evaluation over phantom cases cycling through every variant and both jaws, for the
 //! ablation CA / CA+CR / CA+CR+FR (paper) / default; the assertions read that table.

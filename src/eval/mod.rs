@@ -1,4 +1,4 @@
-//! Registration accuracy over synthetic jaws (issue 3, item 8): per-tooth target registration
+//! Registration accuracy over synthetic jaws: per-tooth target registration
 //! error (TRE, [`crate::phantom::ToothTruth::tre`]) and the paper's surface distance (SD) for the
 //! ablation CA / CA+CR / CA+CR+FR (paper preset) / default, next to the paper's Table 1(a).
 

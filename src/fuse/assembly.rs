@@ -30,10 +30,10 @@ pub fn stitch_tooth(cut: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
 pub(super) struct CrownSide {
     /// The crown (its single boundary loop is the margin).
     pub(super) crown: TriMesh,
-    margin: Vec<u32>,
-    dirs: Vec<DVec3>,
-    chords: Vec<(BandVertex, BandVertex)>,
-    ios_vertex: Vec<u32>,
+    pub(super) margin: Vec<u32>,
+    pub(super) dirs: Vec<DVec3>,
+    pub(super) chords: Vec<(BandVertex, BandVertex)>,
+    pub(super) ios_vertex: Vec<u32>,
 }
 
 impl CrownSide {
@@ -269,7 +269,8 @@ pub(super) fn remedied(ct: &CutTooth, opts: &FuseOptions) -> Result<Remedied> {
 
 fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
     let t_start = std::time::Instant::now();
-    let builds_before = super::build_budget::all_made();
+    let builds_before = super::build_budget::all_asked();
+    let reused_before = super::build_memo::all_reused();
     let _builds = super::build_budget::Scope::start();
     let mut r = remedied(ct, opts)?;
     // Still crossed after every remedy: the cut's fold trim made again reaching farther.
@@ -365,6 +366,7 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         ));
     }
     let stitch_ms = t_start.elapsed().as_secs_f64() * 1e3;
+    let reused = super::build_memo::all_reused() - reused_before;
     Ok(FusedTooth {
         fdi: ct.fdi,
         mesh,
@@ -376,7 +378,8 @@ fn stitch_inner(ct: &CutTooth, opts: &FuseOptions) -> Result<FusedTooth> {
         warnings,
         cut_ms: ct.cut_ms,
         stitch_ms,
-        band_builds: super::build_budget::all_made() - builds_before,
+        band_builds: super::build_budget::all_asked() - builds_before - reused,
+        band_builds_reused: reused,
     })
 }
 
@@ -422,8 +425,15 @@ pub(super) fn crossings_left(a: &Assembled) -> usize {
 /// each other, the loft band is built too and used instead when its faces cross each other less
 /// than the chart band's did ([`stitch::less_crossed_loft`]). A folded band the untangling
 /// clears of its own crossings needs no loft: only the others pay for one.
+/// A build asked for again with the same inputs is the one made before
+/// ([`super::build_memo`]).
 pub(super) fn assemble(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
     super::build_budget::count();
+    super::build_memo::build(ct, side, opts, || made(ct, side, opts))
+}
+
+/// The build [`assemble`] describes, made.
+fn made(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> Result<Assembled> {
     let rc = &ct.root;
     let lower_pts = margin_pts_of(&rc.root, &rc.cut_loop);
     let upper_pts = margin_pts_of(&side.crown, &side.margin);
@@ -469,32 +479,8 @@ fn assembled_with(
     band: &stitch::Band,
 ) -> Result<Assembled> {
     let (margin, rc) = (&side.margin, &ct.root);
-    let mut mesh = side.crown.clone();
-    let mut ios_vertex = side.ios_vertex.clone();
-    let mut source: Vec<u8> = ios_vertex
-        .iter()
-        .map(|&s| {
-            if s == u32::MAX {
-                VertexSource::Band as u8
-            } else {
-                VertexSource::Ios as u8
-            }
-        })
-        .collect();
-    // Assemble: band interior, then root.
-    let band_off = mesh.positions.len() as u32;
-    mesh.positions.extend_from_slice(&band.points);
-    ios_vertex.resize(mesh.positions.len() + rc.root.positions.len(), u32::MAX);
-    source.extend(std::iter::repeat_n(
-        VertexSource::Band as u8,
-        band.points.len(),
-    ));
-    let root_off = mesh.positions.len() as u32;
-    mesh.positions.extend_from_slice(&rc.root.positions);
-    source.extend(std::iter::repeat_n(
-        VertexSource::Cbct as u8,
-        rc.root.positions.len(),
-    ));
+    let band_off = side.crown.positions.len() as u32;
+    let root_off = band_off + band.points.len() as u32;
     let map = |b: BandVertex| match b {
         BandVertex::Upper(i) => margin[i as usize],
         BandVertex::Lower(i) => rc.cut_loop[i as usize] + root_off,
@@ -504,7 +490,7 @@ fn assembled_with(
     // Orient the band against the crown: the crown holds margin[0] → margin[1].
     let (m0, m1) = (margin[0], margin[1 % margin.len()]);
     debug_assert!(
-        EdgeTopology::new(&mesh)
+        EdgeTopology::new(&side.crown)
             .faces_of_directed(m0, m1)
             .next()
             .is_some()
@@ -518,33 +504,73 @@ fn assembled_with(
             t.swap(1, 2);
         }
     }
-    let band_start = mesh.triangles.len();
-    mesh.triangles.extend_from_slice(&band_tris);
-    let band_end = mesh.triangles.len();
     let (c0, c1) = (rc.cut_loop[0] + root_off, rc.cut_loop[1] + root_off);
     if band_has(c0, c1, &band_tris) {
         return Err(Error::InvalidArgument(
             "CBCT root and IOS crown have opposite orientations after the cut".into(),
         ));
     }
+    let mut a = joined(ct, side, &band.points, &band_tris);
+    let (mesh, band_faces) = (&mut a.mesh, a.band.clone());
+    let band_vertices = band_off..root_off;
+    if opts.stitch.optimize {
+        super::band_opt::optimize_band(mesh, band_faces.clone(), band_vertices.clone());
+    } else if opts.stitch.flips {
+        super::band_opt::flip_band(mesh, band_faces.clone(), 6);
+    } else {
+        super::band_opt::fix_degenerate_band(mesh, band_faces.clone());
+    }
+    a.untangle = opts
+        .stitch
+        .untangle
+        .then(|| super::untangle::untangle_band(mesh, band_faces, band_vertices, 5.0));
+    Ok(a)
+}
+
+/// Crown + band vertices `points` + root in one mesh, the band's faces `triangles` (over the
+/// joined mesh's vertices) between the crown's and the root's, no untangling report: a build
+/// before its band is optimised and untangled, or, given a build's final band, that build.
+pub(super) fn joined(
+    ct: &CutTooth,
+    side: &CrownSide,
+    points: &[DVec3],
+    triangles: &[[u32; 3]],
+) -> Assembled {
+    let rc = &ct.root;
+    let mut mesh = side.crown.clone();
+    let mut ios_vertex = side.ios_vertex.clone();
+    let mut source: Vec<u8> = ios_vertex
+        .iter()
+        .map(|&s| {
+            if s == u32::MAX {
+                VertexSource::Band as u8
+            } else {
+                VertexSource::Ios as u8
+            }
+        })
+        .collect();
+    // Crown, band interior, then root.
+    let band_off = mesh.positions.len();
+    mesh.positions.extend_from_slice(points);
+    ios_vertex.resize(mesh.positions.len() + rc.root.positions.len(), u32::MAX);
+    source.extend(std::iter::repeat_n(VertexSource::Band as u8, points.len()));
+    let root_off = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&rc.root.positions);
+    source.extend(std::iter::repeat_n(
+        VertexSource::Cbct as u8,
+        rc.root.positions.len(),
+    ));
+    let band_start = mesh.triangles.len();
+    mesh.triangles.extend_from_slice(triangles);
+    let band_end = mesh.triangles.len();
     mesh.triangles
         .extend(rc.root.triangles.iter().map(|t| t.map(|v| v + root_off)));
-    if opts.stitch.optimize {
-        super::band_opt::optimize_band(&mut mesh, band_start..band_end, band_off..root_off);
-    } else if opts.stitch.flips {
-        super::band_opt::flip_band(&mut mesh, band_start..band_end, 6);
-    } else {
-        super::band_opt::fix_degenerate_band(&mut mesh, band_start..band_end);
-    }
-    let untangle = opts.stitch.untangle.then(|| {
-        super::untangle::untangle_band(&mut mesh, band_start..band_end, band_off..root_off, 5.0)
-    });
-    Ok(Assembled {
+    Assembled {
         mesh,
         source,
         ios_vertex,
         band: band_start..band_end,
-        untangle,
-        crown_vertices: band_off as usize,
-    })
+        untangle: None,
+        crown_vertices: band_off,
+    }
 }

@@ -28,9 +28,12 @@ thread_local! {
     /// Builds made by the last tooth whose stitching ended on this thread.
     #[cfg(test)]
     static LAST: Cell<usize> = const { Cell::new(0) };
-    /// Builds made on this thread in every scope (a tooth's builds with those of the scopes
-    /// inside its own): what [`all_made`] reads.
+    /// Builds asked for on this thread in every scope (a tooth's builds with those of the scopes
+    /// inside its own): what [`all_asked`] reads.
     static ALL: Cell<usize> = const { Cell::new(0) };
+    /// Scopes open on this thread: the builds kept for reuse ([`super::build_memo`]) are
+    /// forgotten where the outermost opens and closes.
+    static DEPTH: Cell<usize> = const { Cell::new(0) };
 }
 
 /// The stitching of one tooth: starts its count of builds, and restores the count it found on
@@ -43,6 +46,9 @@ pub(super) struct Scope {
 impl Scope {
     /// Starts counting a tooth's builds from zero.
     pub(super) fn start() -> Scope {
+        if DEPTH.with(|d| d.replace(d.get() + 1)) == 0 {
+            super::build_memo::clear();
+        }
         Scope {
             outer: MADE.with(|m| m.replace(0)),
         }
@@ -52,6 +58,9 @@ impl Scope {
 impl Drop for Scope {
     fn drop(&mut self) {
         let made = MADE.with(|m| m.replace(self.outer));
+        if DEPTH.with(|d| d.replace(d.get() - 1)) == 1 {
+            super::build_memo::clear();
+        }
         #[cfg(test)]
         LAST.with(|l| l.set(made));
         #[cfg(not(test))]
@@ -59,15 +68,16 @@ impl Drop for Scope {
     }
 }
 
-/// Counts one build.
+/// Counts one build asked for (made, or reused from [`super::build_memo`]).
 pub(super) fn count() {
     MADE.with(|m| m.set(m.get() + 1));
     ALL.with(|a| a.set(a.get() + 1));
 }
 
-/// Builds made on this thread so far in every scope: the difference over a tooth's stitching is
-/// every build it made, those of its remedies' new cuts included.
-pub(super) fn all_made() -> usize {
+/// Builds asked for on this thread so far in every scope: the difference over a tooth's
+/// stitching is every build it asked for, those of its remedies' new cuts included (less
+/// [`super::build_memo::all_reused`]'s, the builds it made).
+pub(super) fn all_asked() -> usize {
     ALL.with(Cell::get)
 }
 

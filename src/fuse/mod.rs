@@ -6,6 +6,7 @@ mod assembly;
 mod band_crossings;
 mod band_opt;
 mod build_budget;
+mod build_memo;
 mod crossed;
 mod flat_cut;
 mod fold_wide;

@@ -44,6 +44,11 @@ pub struct FusedTooth {
     /// crosses nothing; rough and foreign crowns take several: see the margin fringe in the
     /// README). How hard the tooth was, not a quality measure.
     pub band_builds: usize,
+    /// Band builds a remedy asked for again with inputs an earlier build of this tooth had,
+    /// bit for bit: that build reused, not made again (not counted in
+    /// [`FusedTooth::band_builds`]). Only teeth whose remedies go round a cycle of trims have
+    /// any.
+    pub band_builds_reused: usize,
 }
 
 impl FusedTooth {

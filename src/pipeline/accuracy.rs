@@ -1,4 +1,4 @@
-//! Accuracy of a one-call fuse against a synthetic jaw's truth (issue 4, "What it must show"):
+//! Accuracy of a one-call fuse against a synthetic jaw's truth:
 //! per fused tooth, the fused crown's mean distance to the true surface next to the CBCT-only
 //! crown's, the band's largest deviation and smallest angle, and the registration TRE.
 

@@ -1,4 +1,4 @@
-//! The one-call fuse (issue 4, item 4): registration ([`crate::register`], paper section 2.2)
+//! The one-call fuse: registration ([`crate::register`], paper section 2.2)
 //! then crown removal and stitching of every tooth ([`crate::fuse`], paper section 2.3 and
 //! Algorithm 1), with wall-clock timing and the report of the `toothfuse fuse` output contract
 //! ([`report`]).

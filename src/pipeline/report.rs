@@ -1,9 +1,9 @@
-//! The report of the `toothfuse fuse` output contract (issue 4, item 5):
+//! The report of the `toothfuse fuse` output contract:
 //! `{"frame", "teeth": [{"fdi", "cbct_to_output", "ios_to_output", "sd_mm", "rmse_mm",
 //! "watertight", "warnings", ...}], "skipped": [{"fdi", "reason"}], "timing_ms": {"register",
 //! "cut", "stitch", "total", ...}}`. Each tooth also carries the registration fields of
-//! [`crate::register::ToothReport`] (inlier fraction, iterations, convergence) and the fused
-//! mesh's [`ToothQuality`].
+//! [`crate::register::ToothReport`] (inlier fraction, iterations, convergence), the fused
+//! mesh's [`ToothQuality`], and the tooth's band builds.
 
 use super::PipelineResult;
 use crate::fuse::ToothQuality;
@@ -24,6 +24,14 @@ pub struct PipelineTooth {
     /// The fused mesh's quality report (absent when read back from a file that lacks it).
     #[serde(default, skip_deserializing)]
     pub quality: Option<ToothQuality>,
+    /// Band builds made for the tooth ([`crate::fuse::FusedTooth::band_builds`]: 1 for a clean
+    /// crown, several where the margin fringe was trimmed and the band built again).
+    #[serde(default)]
+    pub band_builds: usize,
+    /// Band builds asked for again with inputs built before, reused instead of made
+    /// ([`crate::fuse::FusedTooth::band_builds_reused`]).
+    #[serde(default)]
+    pub band_builds_reused: usize,
 }
 
 /// The whole report.
@@ -62,6 +70,8 @@ impl PipelineResult {
                         registration: t,
                         watertight: f.quality.watertight(),
                         quality: Some(f.quality.clone()),
+                        band_builds: f.band_builds,
+                        band_builds_reused: f.band_builds_reused,
                     });
                 }
                 None => {

@@ -1,6 +1,6 @@
 //! `toothfuse fuse`: register, cut and stitch; writes `fused.<ext>` (all teeth, with per-vertex
 //! `label` = FDI and `source` = 0 IOS / 1 band / 2 CBCT in PLY), `tooth_<fdi>.<ext>` and
-//! `report.json` (the output contract of issue 4). Without inputs it runs on the synthetic jaw
+//! `report.json` (the output contract). Without inputs it runs on the synthetic jaw
 //! and also prints the fused crowns' accuracy against its truth.
 
 use crate::demo::PhantomArgs;
