@@ -27,6 +27,7 @@
 use super::FuseOptions;
 use super::assembly::{Assembled, CrownSide, joined};
 use super::tooth::CutTooth;
+use crate::stitch::BandVertex;
 use glam::DVec3;
 use std::cell::{Cell, RefCell};
 use std::hash::{DefaultHasher, Hasher};
@@ -142,47 +143,96 @@ fn same(x: &Assembled, y: &Assembled) -> bool {
         && x.crown_vertices == y.crown_vertices
 }
 
-/// Two SipHash states fed the same words after different first words: 128 bits.
-struct Key(DefaultHasher, DefaultHasher);
+/// Two SipHash states fed the same bytes after different first bytes: 128 bits. The bytes are
+/// gathered and fed in blocks (SipHash is several times faster over a block than word by word).
+struct Key {
+    a: DefaultHasher,
+    b: DefaultHasher,
+    buf: Vec<u8>,
+}
+
+/// Bytes gathered before they are fed to the hashers.
+const BLOCK: usize = 1 << 14;
 
 impl Key {
     fn new() -> Key {
         let (mut a, mut b) = (DefaultHasher::new(), DefaultHasher::new());
         a.write_u8(0);
         b.write_u8(1);
-        Key(a, b)
+        Key {
+            a,
+            b,
+            buf: Vec::with_capacity(BLOCK + 64),
+        }
     }
 
-    fn word(&mut self, w: u64) {
-        self.0.write_u64(w);
-        self.1.write_u64(w);
+    fn bytes(&mut self, x: &[u8]) {
+        self.buf.extend_from_slice(x);
+        if self.buf.len() >= BLOCK {
+            self.flush();
+        }
     }
 
-    /// A list's length, then its words: lists that end where others begin do not meet.
-    fn list(&mut self, len: usize, ws: impl Iterator<Item = u64>) {
-        self.word(len as u64);
-        ws.for_each(|w| self.word(w));
+    fn flush(&mut self) {
+        self.a.write(&self.buf);
+        self.b.write(&self.buf);
+        self.buf.clear();
+    }
+
+    /// A list's length first: lists that end where others begin do not meet (each list's items
+    /// have one width).
+    fn len(&mut self, n: usize) {
+        self.bytes(&(n as u64).to_le_bytes());
     }
 
     fn points(&mut self, ps: &[DVec3]) {
-        let bits = ps.iter().flat_map(|p| p.to_array().map(f64::to_bits));
-        self.list(ps.len(), bits);
-    }
-
-    fn faces(&mut self, ts: &[[u32; 3]]) {
-        self.list(ts.len(), ts.iter().flatten().map(|&v| u64::from(v)));
+        self.len(ps.len());
+        for p in ps {
+            for c in p.to_array() {
+                self.bytes(&c.to_bits().to_le_bytes());
+            }
+        }
     }
 
     fn indices(&mut self, vs: &[u32]) {
-        self.list(vs.len(), vs.iter().map(|&v| u64::from(v)));
+        self.len(vs.len());
+        for v in vs {
+            self.bytes(&v.to_le_bytes());
+        }
+    }
+
+    fn faces(&mut self, ts: &[[u32; 3]]) {
+        self.len(ts.len());
+        for t in ts {
+            for v in t {
+                self.bytes(&v.to_le_bytes());
+            }
+        }
+    }
+
+    fn chords(&mut self, cs: impl ExactSizeIterator<Item = (BandVertex, BandVertex)>) {
+        self.len(cs.len());
+        for (x, y) in cs {
+            for v in [x, y] {
+                let (tag, i) = match v {
+                    BandVertex::Upper(i) => (0u8, i),
+                    BandVertex::Lower(i) => (1, i),
+                    BandVertex::Interior(i) => (2, i),
+                };
+                self.bytes(&[tag]);
+                self.bytes(&i.to_le_bytes());
+            }
+        }
     }
 
     fn text(&mut self, s: &str) {
-        self.list(s.len(), s.bytes().map(u64::from));
+        self.len(s.len());
+        self.bytes(s.as_bytes());
     }
 
-    fn finish(self) -> u128 {
-        (u128::from(self.0.finish()) << 64) | u128::from(self.1.finish())
+    fn finish(mut self) -> u128 {
+        self.flush();
+        (u128::from(self.a.finish()) << 64) | u128::from(self.b.finish())
     }
 }
 
@@ -194,13 +244,14 @@ fn key(ct: &CutTooth, side: &CrownSide, opts: &FuseOptions) -> u128 {
     k.indices(&side.margin);
     k.points(&side.dirs);
     k.indices(&side.ios_vertex);
-    k.text(&format!("{:?}", side.chords));
+    k.chords(side.chords.iter().copied());
     let rc = &ct.root;
     k.points(&rc.root.positions);
     k.faces(&rc.root.triangles);
     k.indices(&rc.cut_loop);
     k.points(&ct.root_dirs);
-    k.text(&format!("{:?}", ct.root_chords().collect::<Vec<_>>()));
+    let root_chords: Vec<_> = ct.root_chords().collect();
+    k.chords(root_chords.into_iter());
     let f = &ct.frame;
     k.points(&[f.center, f.axis, f.e1, f.e2]);
     // Debug output of floats round-trips exactly: equal text, equal options.

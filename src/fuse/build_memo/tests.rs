@@ -132,12 +132,21 @@ fn keys_tell_every_input_apart() {
     let mut t = ct.clone();
     t.frame.axis = -t.frame.axis;
     keys.push(key(&t, &side, &opts));
-    // A crown vertex moved into the root's list: the same words, in other lists.
+    // The crown's last vertex taken from its positions and its bits put at the head of its
+    // faces (two faces of three 32-bit words): the same bytes in a row, in other lists.
     let mut s = side.clone();
-    let mut t = ct.clone();
     let p = s.crown.positions.pop().expect("crown vertex");
-    t.root.root.positions.insert(0, p);
-    keys.push(key(&t, &s, &opts));
+    let w: Vec<u32> = p
+        .to_array()
+        .iter()
+        .flat_map(|c| {
+            let b = c.to_bits();
+            [b as u32, (b >> 32) as u32]
+        })
+        .collect();
+    s.crown.triangles.insert(0, [w[3], w[4], w[5]]);
+    s.crown.triangles.insert(0, [w[0], w[1], w[2]]);
+    keys.push(key(ct, &s, &opts));
     // The stitch options.
     let mut o = opts;
     o.stitch.tangent_scale *= 1.0 + f64::EPSILON;
