@@ -257,6 +257,12 @@ fn stages_give_the_one_call_fuse_bit_for_bit_and_open_one_loop_roots() {
         v["timing_ms"]
     );
     assert_eq!(v["teeth"].as_array().unwrap().len(), staged.len());
+    // Per tooth, the band builds: at least one made; reused ones only after one made.
+    for tooth in v["teeth"].as_array().unwrap() {
+        let (made, reused) = (&tooth["band_builds"], &tooth["band_builds_reused"]);
+        let (made, reused) = (made.as_u64().unwrap(), reused.as_u64().unwrap());
+        assert!(made >= 1 && (reused == 0 || made > 1), "{tooth}");
+    }
     // Stitching the same cut again gives the same meshes.
     // SAFETY: as above.
     unsafe { call(&s, toothfuse_session_stitch(s.0, ptr::null())) };
