@@ -314,6 +314,29 @@ def test_a_fuse_runs_where_sigint_is_ignored_or_a_hosts_own():
         signal.signal(signal.SIGINT, before)
 
 
+def test_a_fuse_runs_on_a_worker_thread():
+    """A host's worker thread (a GUI keeping its own thread free) runs the call unwatched, as
+    Ctrl-C belongs to the main thread: the same jaw as on the main thread."""
+    import threading
+    args = _demo_args()
+    plain = toothfuse.fuse(*args)
+    out = {}
+
+    def work():
+        try:
+            out["r"] = toothfuse.fuse(*args)
+        except BaseException as e:  # re-raised on the test's thread below
+            out["e"] = e
+
+    t = threading.Thread(target=work)
+    t.start()
+    t.join()
+    if "e" in out:
+        raise out["e"]
+    assert out["r"].teeth == plain.teeth and len(plain.teeth) >= 3
+    assert out["r"].positions.tobytes() == plain.positions.tobytes()
+
+
 def test_ctrl_c_cancels_a_running_fuse_without_a_callback():
     import _thread
     import signal
