@@ -8,7 +8,7 @@ use crate::input::{InputArgs, Ios};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};
-use toothfuse::pipeline::{self, PipelineResult, accuracy::fusion_accuracy};
+use toothfuse::pipeline::{self, PipelineReport, PipelineResult, accuracy::fusion_accuracy};
 
 /// `toothfuse fuse` arguments.
 #[derive(Args, Debug)]
@@ -49,13 +49,18 @@ pub fn run(a: &FuseArgs) -> Result<()> {
     for s in &rep.skipped {
         println!("skipped tooth {}: {}", s.fdi, s.reason);
     }
+    let crossed = crossed_teeth(&rep);
+    for w in &crossed {
+        println!("{w}");
+    }
     for q in &rep.questionable_findings {
         println!("warning: questionable data accepted: {q}");
     }
     println!(
-        "fused {} teeth ({} watertight, {} skipped) into {}; register {:.1} ms, cut {:.1} ms, stitch {:.1} ms, total {:.1} ms",
+        "fused {} teeth ({} watertight, {} with crossings added, {} skipped) into {}; register {:.1} ms, cut {:.1} ms, stitch {:.1} ms, total {:.1} ms",
         rep.teeth.len(),
         watertight,
+        crossed.len(),
         rep.skipped.len(),
         a.out.display(),
         r.timing.register_ms,
@@ -90,6 +95,25 @@ pub fn run(a: &FuseArgs) -> Result<()> {
     Ok(())
 }
 
+/// A warning line per fused tooth the fusion left with intersecting face pairs it added (a band
+/// face crossing another face, or a face added to the crown crossing the crown): the output
+/// contract does not hold on that tooth, which is fused and reported, not refused.
+fn crossed_teeth(rep: &PipelineReport) -> Vec<String> {
+    rep.teeth
+        .iter()
+        .filter_map(|t| {
+            let q = t.quality.as_ref()?;
+            let n = q.band_crossings_left + q.crown_crossings_added;
+            (n > 0).then(|| {
+                format!(
+                    "warning: tooth {}: {n} intersecting face pairs added by the fusion are left ({} with a band face, {} with a face added to the crown; see report.json)",
+                    t.registration.fdi, q.band_crossings_left, q.crown_crossings_added
+                )
+            })
+        })
+        .collect()
+}
+
 /// Writes the meshes and `report.json` into `dir`.
 pub fn write_outputs(r: &PipelineResult, dir: &Path, ext: &str) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -110,4 +134,66 @@ pub fn write_outputs(r: &PipelineResult, dir: &Path, ext: &str) -> Result<()> {
     let rp = dir.join("report.json");
     std::fs::write(&rp, r.to_json()).with_context(|| format!("writing {}", rp.display()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use toothfuse::pipeline::PipelineTooth;
+
+    /// A report of three teeth: one clear, one left with band pairs, one with no quality.
+    fn report() -> PipelineReport {
+        let tooth = |fdi: u8, band: usize, crown: usize, quality: bool| {
+            let q = toothfuse::fuse::ToothQuality {
+                band_crossings_left: band,
+                crown_crossings_added: crown,
+                ..Default::default()
+            };
+            PipelineTooth {
+                registration: toothfuse::register::ToothReport {
+                    fdi,
+                    cbct_to_output: Vec::new(),
+                    ios_to_output: Vec::new(),
+                    sd_mm: 0.1,
+                    rmse_mm: 0.1,
+                    inlier_fraction: 1.0,
+                    iterations: 5,
+                    converged: true,
+                    warnings: Vec::new(),
+                },
+                watertight: true,
+                quality: quality.then_some(q),
+                band_builds: 1,
+                band_builds_reused: 0,
+            }
+        };
+        PipelineReport {
+            frame: "cbct".into(),
+            teeth: vec![
+                tooth(11, 0, 0, true),
+                tooth(22, 37, 2, true),
+                tooth(23, 5, 0, false),
+            ],
+            skipped: Vec::new(),
+            sd_mm: 0.1,
+            timing_ms: Default::default(),
+            timing_note: String::new(),
+            questionable: false,
+            questionable_findings: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn teeth_left_with_crossings_are_named_with_their_counts() {
+        let w = crossed_teeth(&report());
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("warning: tooth 22: 39 intersecting face pairs"),
+            "{w:?}"
+        );
+        assert!(
+            w[0].contains("37 with a band face, 2 with a face added"),
+            "{w:?}"
+        );
+    }
 }
