@@ -8,7 +8,9 @@
 //!
 //! - **Key**: a 128-bit SipHash of every input a build reads, as bits (the crown side's
 //!   positions, faces, margin, directions, chords and IOS indices; the root's positions, faces,
-//!   cut loop, directions and chords; the tooth frame; the stitch options).
+//!   cut loop, directions and chords; the tooth frame; the stitch options). Inputs are told
+//!   apart by their keys alone: two different inputs with one key, a chance of ~2^-128 per pair
+//!   of a tooth's at most [`MAX_KEPT`] builds, would reuse the wrong build.
 //! - **What is kept**: only the band's part of a build (its new vertices' final positions, its
 //!   faces, the untangling's report). The crown and root parts are the inputs' own: a build is
 //!   kept only after the mesh joined again from that part ([`super::assembly::joined`]) is found
@@ -32,7 +34,7 @@ use glam::DVec3;
 use std::cell::{Cell, RefCell};
 use std::hash::{DefaultHasher, Hasher};
 
-/// Builds kept per tooth at most (past it, builds are made as if none were kept).
+/// Builds kept per tooth at most (past it, later builds are made and not kept).
 pub(super) const MAX_KEPT: usize = 64;
 
 /// The band's part of one build: what [`joined`] needs to make the whole build again.
