@@ -10,8 +10,14 @@ use crate::pipeline::{PipelineOptions, transforms_of};
 
 /// The seed-53 upper jaw with stitching drift as a coarse export, registered and cut as the
 /// library's one-call fuse does: its incisors' remedies come back to crown sides they built
-/// from before (tooth 12: 7 builds made, 20 asked for again, when this test was written).
-fn cut_jaw_53() -> CutJaw {
+/// from before (tooth 12: 7 builds made, 20 asked for again, when this test was written). Made
+/// once for the tests of this file.
+fn cut_jaw_53() -> &'static CutJaw {
+    static JAW: std::sync::OnceLock<CutJaw> = std::sync::OnceLock::new();
+    JAW.get_or_init(made_jaw_53)
+}
+
+fn made_jaw_53() -> CutJaw {
     let mut po = PhantomOptions {
         seed: 53,
         jaw: Jaw::Upper,
