@@ -425,8 +425,7 @@ pub unsafe extern "C" fn toothfuse_session_fused_crossings(
             let t = fused_tooth(s, fdi)?;
             // SAFETY: forwarded contract on both output pointers.
             unsafe {
-                let added = t.quality.band_crossings_left + t.quality.crown_crossings_added;
-                write_out(band_out, added, "band_out")?;
+                write_out(band_out, t.quality.crossings_added(), "band_out")?;
                 write_out(ios_out, t.ios_self_intersections(), "ios_out")
             }
         };

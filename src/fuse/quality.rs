@@ -73,6 +73,12 @@ impl ToothQuality {
             && self.degenerate_faces == 0
             && self.self_intersections.unwrap_or(0) == 0
     }
+
+    /// Intersecting face pairs the fusion added and left: those with a band face and those with
+    /// a face added to the crown (0 when the output contract's no-crossing part holds).
+    pub fn crossings_added(&self) -> usize {
+        self.band_crossings_left + self.crown_crossings_added
+    }
 }
 
 /// Angles (degrees) of a triangle.

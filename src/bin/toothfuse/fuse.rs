@@ -103,7 +103,7 @@ fn crossed_teeth(rep: &PipelineReport) -> Vec<String> {
         .iter()
         .filter_map(|t| {
             let q = t.quality.as_ref()?;
-            let n = q.band_crossings_left + q.crown_crossings_added;
+            let n = q.crossings_added();
             (n > 0).then(|| {
                 format!(
                     "warning: tooth {}: {n} intersecting face pairs added by the fusion are left ({} with a band face, {} with a face added to the crown; see report.json)",
