@@ -27,15 +27,12 @@ from ._core import (
     STATUS_MIRRORED,
     STATUS_REGISTRATION_REJECTED,
     STATUS_UNIT_MISMATCH,
-    FusedJaw,
     Session,
     ToothfuseError,
     abi_version,
-    fuse,
-    is_fdi,
-    merge_meshes,
     version,
 )
+from ._jaw import FusedJaw, fuse, is_fdi, merge_meshes
 from ._files import MeshFile, read_mesh
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""The ctypes layer of the toothfuse package over the library's C ABI.
+"""The Python API of the toothfuse package over the library's C ABI (declared in _abi.py).
 
     import toothfuse
     with toothfuse.Session() as s:
@@ -16,228 +16,102 @@ sequence of ints, 3 per triangle. array.array('f') input is passed as float32 wi
 through Python floats; everything else as float64. numpy arrays (any shape, e.g. (n, 3)) are
 accepted when numpy is installed: float32/float64 pass without a copy, and `fuse` then returns
 numpy arrays ((n, 3) positions, (m, 3) triangles); otherwise results are array.array values.
-The library is found from the environment variable TOOTHFUSE_LIBRARY, else the
-libtoothfuse.so shipped inside the installed package, else as libtoothfuse.so.<major> /
-libtoothfuse.so on the loader path. Errors raise ToothfuseError
-carrying the status and the session's detailed message.
+The library and its C functions are declared in _abi.py. Errors raise ToothfuseError carrying
+the status and the session's detailed message.
 """
 
 import array
 import ctypes
 import json
-import os
 import signal
 import threading
 
-__all__ = ["Session", "ToothfuseError", "FusedJaw", "fuse", "merge_meshes", "is_fdi", "IOS",
-           "CBCT", "version",
-           "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT", "STATUS_UNIT_MISMATCH",
+from ._abi import (  # noqa: F401 (some only re-exported: __init__, _files, the tests)
+    ABI_VERSION,
+    CBCT,
+    IOS,
+    LIBRARY_PATH,
+    SOURCE_BAND,
+    SOURCE_CBCT,
+    SOURCE_IOS,
+    STATUS_CANCELLED,
+    STATUS_MIRRORED,
+    STATUS_REGISTRATION_REJECTED,
+    STATUS_UNIT_MISMATCH,
+    ToothfuseError,
+    _FACE,
+    _FLOAT32,
+    _FLOAT64,
+    _FRAMES,
+    _FusedQuality,
+    _MeshInfo,
+    _NO_PROGRESS,
+    _OK,
+    _Options,
+    _PRESETS,
+    _PROGRESS_FN,
+    _S,
+    _STAGES,
+    _TRANSFORMS,
+    _ToothReport,
+    _VERTEX,
+    _add_jaw,
+    _add_tooth,
+    _add_volume,
+    _copy_ci,
+    _copy_cl,
+    _copy_cv,
+    _copy_fi,
+    _copy_fl,
+    _copy_fs,
+    _copy_fv,
+    _copy_i,
+    _copy_s,
+    _copy_v,
+    _count,
+    _crossings,
+    _cut,
+    _cut_size,
+    _cut_teeth,
+    _d_p,
+    _dropped,
+    _fn,
+    _free,
+    _fuse,
+    _fuse_registered,
+    _fused_size,
+    _fused_teeth,
+    _i32_p,
+    _info,
+    _last_error,
+    _list,
+    _new,
+    _opts_default,
+    _quality,
+    _register,
+    _registered,
+    _remove,
+    _report,
+    _report_json,
+    _set_progress,
+    _set_repair,
+    _set_threads,
+    _size,
+    _size_p,
+    _skipped,
+    _skipped_count,
+    _st,
+    _stitch,
+    _transform,
+    _trim,
+    _u32_p,
+    _warning,
+    abi_version,
+    version,
+)
+
+__all__ = ["Session", "ToothfuseError", "IOS", "CBCT", "version", "abi_version", "SOURCE_IOS", "SOURCE_BAND", "SOURCE_CBCT", "STATUS_UNIT_MISMATCH",
            "STATUS_MIRRORED", "STATUS_REGISTRATION_REJECTED", "STATUS_CANCELLED"]
-
-IOS = 0
-CBCT = 1
-SOURCE_IOS = 0
-SOURCE_BAND = 1
-SOURCE_CBCT = 2
-STATUS_UNIT_MISMATCH = 6
-STATUS_MIRRORED = 14
-STATUS_REGISTRATION_REJECTED = 15
-STATUS_CANCELLED = 16
-_STAGES = {1: "register", 2: "cut", 3: "stitch", 4: "surface"}
-_PRESETS = {"paper": 0, "default": 1}
-_FRAMES = {"cbct": 0, "ios": 1}
-_TRANSFORMS = {"cbct_to_output": 0, "ios_to_output": 1, "cbct_to_ios": 2}
-_FLOAT32 = 0
-_FLOAT64 = 1
-_VERTEX = 0
-_FACE = 1
-_OK = 0
-ABI_VERSION = 2
-
-
-_BUNDLED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "libtoothfuse.so")
-
-
-def _load():
-    bundled = _BUNDLED if os.path.exists(_BUNDLED) else None
-    names = [os.environ.get("TOOTHFUSE_LIBRARY"), bundled, "libtoothfuse.so.0", "libtoothfuse.so"]
-    last = None
-    for name in names:
-        if not name:
-            continue
-        try:
-            return ctypes.CDLL(name)
-        except OSError as e:  # try the next name
-            last = e
-    raise OSError(f"cannot load the toothfuse library (set TOOTHFUSE_LIBRARY): {last}")
-
-
-_lib = _load()
-LIBRARY_PATH = _lib._name
-_size_p = ctypes.POINTER(ctypes.c_size_t)
-_u32_p = ctypes.POINTER(ctypes.c_uint32)
-_i32_p = ctypes.POINTER(ctypes.c_int32)
-
-
-class _MeshInfo(ctypes.Structure):
-    _fields_ = [
-        ("vertex_count", ctypes.c_size_t),
-        ("triangle_count", ctypes.c_size_t),
-        ("boundary_edges", ctypes.c_size_t),
-        ("boundary_loops", ctypes.c_size_t),
-        ("longest_loop_vertices", ctypes.c_size_t),
-        ("components", ctypes.c_size_t),
-        ("closed", ctypes.c_bool),
-        ("manifold", ctypes.c_bool),
-        ("signed_volume", ctypes.c_double),
-        ("area", ctypes.c_double),
-    ]
-
-
-class _Options(ctypes.Structure):
-    _fields_ = [("struct_size", ctypes.c_size_t), ("preset", ctypes.c_uint32),
-                ("frame", ctypes.c_uint32), ("accept_questionable", ctypes.c_uint32)]
-
-
-class _ToothReport(ctypes.Structure):
-    _fields_ = [
-        ("sd_mm", ctypes.c_double),
-        ("rmse_mm", ctypes.c_double),
-        ("inlier_fraction", ctypes.c_double),
-        ("fine_correction_mm", ctypes.c_double),
-        ("iterations", ctypes.c_size_t),
-        ("warning_count", ctypes.c_size_t),
-        ("converged", ctypes.c_bool),
-    ]
-
-
-class _FusedQuality(ctypes.Structure):
-    _fields_ = [
-        ("volume", ctypes.c_double),
-        ("band_min_angle_deg", ctypes.c_double),
-        ("band_edge_mean", ctypes.c_double),
-        ("components", ctypes.c_size_t),
-        ("boundary_edges", ctypes.c_size_t),
-        ("non_manifold_edges", ctypes.c_size_t),
-        ("non_manifold_vertices", ctypes.c_size_t),
-        ("self_intersections", ctypes.c_size_t),
-        ("degenerate_faces", ctypes.c_size_t),
-        ("band_faces", ctypes.c_size_t),
-        ("crown_vertices", ctypes.c_size_t),
-        ("closed", ctypes.c_bool),
-        ("manifold", ctypes.c_bool),
-        ("watertight", ctypes.c_bool),
-    ]
-
-
-def _fn(name, restype, *argtypes):
-    f = getattr(_lib, name)
-    f.restype = restype
-    f.argtypes = list(argtypes)
-    return f
-
-
-_S = ctypes.c_void_p
-_st = ctypes.c_uint32
-_version = _fn("toothfuse_version", ctypes.c_char_p)
-_abi_version = _fn("toothfuse_abi_version", ctypes.c_uint32)
-_status_string = _fn("toothfuse_status_string", ctypes.c_char_p, ctypes.c_uint32)
-_new = _fn("toothfuse_session_new", _st, ctypes.POINTER(ctypes.c_void_p))
-_free = _fn("toothfuse_session_free", None, _S)
-_last_error = _fn("toothfuse_session_last_error", ctypes.c_char_p, _S)
-_buf = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32, _u32_p, ctypes.c_size_t]
-_add_tooth = _fn("toothfuse_session_add_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32, *_buf)
-_add_jaw = _fn("toothfuse_session_add_jaw", _st, _S, ctypes.c_uint32, *_buf, _i32_p,
-               ctypes.c_size_t, ctypes.c_uint32)
-_d_p = ctypes.POINTER(ctypes.c_double)
-_add_volume = _fn("toothfuse_session_add_label_volume", _st, _S, _size_p, _d_p, _d_p, _d_p,
-                  ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint32, ctypes.c_uint32, _size_p)
-_set_repair = _fn("toothfuse_session_set_ios_repair", _st, _S, ctypes.c_bool, ctypes.c_double)
-_set_threads = _fn("toothfuse_session_set_max_threads", _st, _S, ctypes.c_uint32)
-_PROGRESS_FN = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_uint32, ctypes.c_size_t,
-                                ctypes.c_size_t)
-_set_progress = _fn("toothfuse_session_set_progress", _st, _S, _PROGRESS_FN, ctypes.c_void_p)
-_NO_PROGRESS = _PROGRESS_FN()
-_remove = _fn("toothfuse_session_remove_tooth", _st, _S, ctypes.c_uint32, ctypes.c_int32)
-_count = _fn("toothfuse_session_tooth_count", _st, _S, ctypes.c_uint32, _size_p)
-_list = _fn("toothfuse_session_list_teeth", _st, _S, ctypes.c_uint32, _i32_p, ctypes.c_size_t,
-            _size_p)
-_size = _fn("toothfuse_session_mesh_size", _st, _S, ctypes.c_uint32, ctypes.c_int32, _size_p,
-            _size_p)
-_copy_v = _fn("toothfuse_session_copy_vertices", _st, _S, ctypes.c_uint32, ctypes.c_int32,
-              ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32)
-_copy_i = _fn("toothfuse_session_copy_indices", _st, _S, ctypes.c_uint32, ctypes.c_int32, _u32_p,
-              ctypes.c_size_t)
-_copy_s = _fn("toothfuse_session_copy_source_vertices", _st, _S, ctypes.c_uint32, ctypes.c_int32,
-              _u32_p, ctypes.c_size_t)
-_info = _fn("toothfuse_session_mesh_info", _st, _S, ctypes.c_uint32, ctypes.c_int32,
-            ctypes.POINTER(_MeshInfo))
-_opts_default = _fn("toothfuse_options_default", _st, ctypes.POINTER(_Options))
-_register = _fn("toothfuse_session_register", _st, _S, ctypes.POINTER(_Options))
-_fuse = _fn("toothfuse_session_fuse", _st, _S, ctypes.POINTER(_Options))
-_fuse_registered = _fn("toothfuse_session_fuse_registered", _st, _S, ctypes.POINTER(_Options))
-_cut = _fn("toothfuse_session_cut", _st, _S, ctypes.POINTER(_Options))
-_stitch = _fn("toothfuse_session_stitch", _st, _S, ctypes.POINTER(_Options))
-_cut_teeth = _fn("toothfuse_session_cut_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
-_cut_size = _fn("toothfuse_session_cut_size", _st, _S, ctypes.c_int32, _size_p, _size_p, _size_p)
-_copy_cv = _fn("toothfuse_session_copy_cut_vertices", _st, _S, ctypes.c_int32, ctypes.c_void_p,
-               ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32)
-_copy_ci = _fn("toothfuse_session_copy_cut_indices", _st, _S, ctypes.c_int32, _u32_p,
-               ctypes.c_size_t)
-_copy_cl = _fn("toothfuse_session_copy_cut_loop", _st, _S, ctypes.c_int32, _u32_p,
-               ctypes.c_size_t)
-_registered = _fn("toothfuse_session_registered_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
-_fused_teeth = _fn("toothfuse_session_fused_teeth", _st, _S, _i32_p, ctypes.c_size_t, _size_p)
-_transform = _fn("toothfuse_session_transform", _st, _S, ctypes.c_int32, ctypes.c_uint32,
-                 ctypes.POINTER(ctypes.c_double))
-_report = _fn("toothfuse_session_tooth_report", _st, _S, ctypes.c_int32,
-              ctypes.POINTER(_ToothReport))
-_warning = _fn("toothfuse_session_tooth_warning", _st, _S, ctypes.c_int32, ctypes.c_size_t,
-               ctypes.POINTER(ctypes.c_char_p))
-_skipped_count = _fn("toothfuse_session_skipped_count", _st, _S, _size_p)
-_skipped = _fn("toothfuse_session_skipped", _st, _S, ctypes.c_size_t, _i32_p,
-               ctypes.POINTER(ctypes.c_char_p))
-_report_json = _fn("toothfuse_session_report_json", _st, _S, ctypes.c_char_p, ctypes.c_size_t,
-                   _size_p)
-_fused_size = _fn("toothfuse_session_fused_size", _st, _S, ctypes.c_int32, _size_p, _size_p)
-_copy_fv = _fn("toothfuse_session_copy_fused_vertices", _st, _S, ctypes.c_int32, ctypes.c_void_p,
-               ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint32)
-_copy_fi = _fn("toothfuse_session_copy_fused_indices", _st, _S, ctypes.c_int32, _u32_p,
-               ctypes.c_size_t)
-_copy_fs = _fn("toothfuse_session_copy_fused_sources", _st, _S, ctypes.c_int32,
-               ctypes.POINTER(ctypes.c_uint8), ctypes.c_size_t)
-_copy_fl = _fn("toothfuse_session_copy_fused_labels", _st, _S, _i32_p, ctypes.c_size_t)
-_quality = _fn("toothfuse_session_fused_quality", _st, _S, ctypes.c_int32,
-               ctypes.POINTER(_FusedQuality))
-_trim = _fn("toothfuse_session_fused_trim", _st, _S, ctypes.c_int32,
-            ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_double))
-_dropped = _fn("toothfuse_session_fused_dropped", _st, _S, ctypes.c_int32,
-               ctypes.POINTER(ctypes.c_size_t))
-_crossings = _fn("toothfuse_session_fused_crossings", _st, _S, ctypes.c_int32,
-                 ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_size_t))
-
-
-def version():
-    """The library version, "MAJOR.MINOR.PATCH"."""
-    return _version().decode()
-
-
-def abi_version():
-    """The C ABI version the library implements."""
-    return _abi_version()
-
-
-if abi_version() != ABI_VERSION:
-    raise ImportError(f"toothfuse ABI {abi_version()} but these bindings expect {ABI_VERSION}")
-
-
-class ToothfuseError(Exception):
-    """A failed call: `status` (int), `status_name` (static text) and the detailed message."""
-
-    def __init__(self, status, message):
-        self.status = status
-        self.status_name = _status_string(status).decode()
-        super().__init__(f"{self.status_name}: {message}" if message else self.status_name)
 
 
 def _numpy():
@@ -707,109 +581,3 @@ def _options(preset, frame, accept_questionable=False):
     o.preset, o.frame = _PRESETS[preset], _FRAMES[frame]
     o.accept_questionable = 1 if accept_questionable else 0
     return o
-
-
-def is_fdi(n):
-    """True for an FDI tooth number: 11-18 ... 41-48 (permanent), 51-55 ... 81-85 (primary)."""
-    q, u = divmod(int(n), 10)
-    return (1 <= q <= 4 and 1 <= u <= 8) or (5 <= q <= 8 and 1 <= u <= 5)
-
-
-def merge_meshes(parts):
-    """Merges labeled meshes (e.g. one CBCT tooth per object) into one jaw with per-face labels,
-    for `fuse(..., cbct_per_face=True)`. parts: (vertices, triangles, labels, per_face) with
-    flat or nested vertices/triangles; labels one per vertex (per_face False; a face takes the
-    label of its vertices, which must agree) or one per face, or a single int for the whole
-    mesh. Returns (flat vertex list, flat triangle list, per-face labels)."""
-    xyz, tris, face_labels = [], [], []
-    for k, (v, t, labels, per_face) in enumerate(parts):
-        v, t = list(_flat(v)), list(_flat(t))
-        if len(v) % 3 or len(t) % 3:
-            raise ValueError(f"mesh {k}: coordinate or index count not a multiple of 3")
-        base, nf = len(v) // 3, len(t) // 3
-        if t and (min(t) < 0 or max(t) >= base):
-            raise ValueError(f"mesh {k}: a triangle index is outside 0..{base - 1}")
-        if isinstance(labels, int):
-            fl = [labels] * nf
-        elif per_face:
-            fl = list(_flat(labels))
-            if len(fl) != nf:
-                raise ValueError(f"mesh {k}: {len(fl)} face labels for {nf} faces")
-        else:
-            vl = list(_flat(labels))
-            if len(vl) != base:
-                raise ValueError(f"mesh {k}: {len(vl)} vertex labels for {base} vertices")
-            fl = []
-            for f in range(nf):
-                a, b, c = (vl[t[3 * f + i]] for i in range(3))
-                if not a == b == c:
-                    raise ValueError(f"mesh {k}: face {f} spans labels {a}, {b}, {c}")
-                fl.append(a)
-        off = len(xyz) // 3
-        xyz.extend(v)
-        tris.extend(i + off for i in t)
-        face_labels.extend(int(x) for x in fl)
-    return xyz, tris, face_labels
-
-
-class FusedJaw:
-    """Result of `fuse`: the fused jaw and what happened to each tooth.
-
-    positions: vertex x, y, z (flat array('d'), or an (n, 3) numpy array); triangles: vertex
-    indices (flat array('I'), or (m, 3) uint32); labels: per-vertex FDI (array('i') / int32);
-    sources: per-vertex SOURCE_IOS, SOURCE_BAND or SOURCE_CBCT (array('B') / uint8); teeth: the
-    fused FDI numbers; skipped: [(fdi, reason)]; quality: {fdi: dict}; transforms: {fdi:
-    {"cbct_to_output": [16], "ios_to_output": [16], "cbct_to_ios": [16]}}; report: the
-    report.json dict; frame: "cbct" or "ios"; questionable: True when the registration gate
-    found the data questionable and `accept_questionable` let it through."""
-
-    def __init__(self, **fields):
-        self.__dict__.update(fields)
-
-    def __repr__(self):
-        return (f"FusedJaw(teeth={self.teeth}, skipped={[f for f, _ in self.skipped]}, "
-                f"vertices={len(self.labels)}, frame={self.frame!r})")
-
-
-def fuse(ios_vertices, ios_triangles, ios_labels, cbct_vertices, cbct_triangles, cbct_labels,
-         *, ios_per_face=False, cbct_per_face=False, preset="default", frame="cbct",
-         ios_repair=False, max_hole_fraction=0.5, as_numpy=None, accept_questionable=False,
-         max_threads=0, progress=None):
-    """One call: a labeled IOS jaw (FDI per vertex, or per face with ios_per_face; 0 =
-    gingiva) and labeled CBCT teeth (one mesh with FDI labels; every tooth closed) -> FusedJaw.
-    ios_repair repairs real-scan crowns on entry. Results are numpy arrays when as_numpy is
-    True, or when it is None and numpy is installed and the IOS vertices are a numpy array.
-    Raises ToothfuseError with the library's message (naming the tooth at fault): status
-    STATUS_UNIT_MISMATCH for wrong units, STATUS_MIRRORED for a mirrored modality,
-    STATUS_REGISTRATION_REJECTED for data that do not belong together (another patient, the other
-    jaw, shifted labels). accept_questionable=True registers such data anyway; the result's
-    `questionable` is then True and report["questionable_findings"] names the findings.
-    max_threads caps the threads the call uses (0: no cap; 1: all on the calling thread); the
-    results are the same whatever it is. progress: a callback(stage, done, total) as
-    Session.set_progress takes it (a truthy return cancels: ToothfuseError, STATUS_CANCELLED)."""
-    with Session() as s:
-        s.set_max_threads(max_threads)
-        s.set_progress(progress)
-        if ios_repair:
-            s.set_ios_repair(True, max_hole_fraction)
-        s.add_jaw(IOS, ios_vertices, ios_triangles, ios_labels, per_face=ios_per_face)
-        s.add_jaw(CBCT, cbct_vertices, cbct_triangles, cbct_labels, per_face=cbct_per_face)
-        teeth = s.fuse(preset=preset, frame=frame, accept_questionable=accept_questionable)
-        pos, idx, src, labels = s.fused_mesh(0)
-        jaw = FusedJaw(
-            positions=pos, triangles=idx, labels=labels, sources=src, teeth=teeth,
-            skipped=s.skipped(), frame=frame, report=s.report(),
-            questionable=bool(s.report().get("questionable", False)),
-            quality={f: s.fused_quality(f) for f in teeth},
-            transforms={f: {w: s.transform(f, w) for w in _TRANSFORMS} for f in teeth})
-    if as_numpy is None:
-        as_numpy = _is_ndarray(ios_vertices)
-    if as_numpy:
-        np = _numpy()
-        if np is None:
-            raise ImportError("as_numpy=True needs numpy")
-        jaw.positions = np.frombuffer(pos, dtype=np.float64).reshape(-1, 3)
-        jaw.triangles = np.frombuffer(idx, dtype=np.uint32).reshape(-1, 3)
-        jaw.labels = np.frombuffer(labels, dtype=np.int32)
-        jaw.sources = np.frombuffer(src, dtype=np.uint8)
-    return jaw

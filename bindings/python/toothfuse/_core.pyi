@@ -1,4 +1,4 @@
-# Type hints of the ctypes layer (the implementation is toothfuse/_core.py).
+# Type hints of the Python API (the implementation is toothfuse/_core.py over toothfuse/_abi.py).
 from typing import Any, Callable, Optional, Sequence
 
 Buffer = Any  # a flat or (n, 3) sequence, array.array or numpy array
@@ -17,8 +17,6 @@ LIBRARY_PATH: str
 
 def version() -> str: ...
 def abi_version() -> int: ...
-def is_fdi(n: int) -> bool: ...
-def merge_meshes(parts: Sequence[tuple[Buffer, Buffer]]) -> tuple[Any, Any, Any]: ...
 
 class ToothfuseError(Exception):
     status: int
@@ -62,26 +60,6 @@ class Session:
     def report(self) -> dict[str, Any]: ...
     def fused_mesh(self, fdi: int = ...) -> tuple[Any, Any, Any, Optional[Any]]: ...
     def fused_quality(self, fdi: int) -> dict[str, Any]: ...
-
-class FusedJaw:
-    positions: Any
-    triangles: Any
-    labels: Any
-    sources: Any
-    teeth: list[int]
-    skipped: list[tuple[int, str]]
-    quality: dict[int, dict[str, Any]]
-    transforms: dict[int, dict[str, list[float]]]
-    report: dict[str, Any]
-    frame: str
-    def __init__(self, **fields: Any) -> None: ...
-
-def fuse(ios_vertices: Buffer, ios_triangles: Buffer, ios_labels: Buffer, cbct_vertices: Buffer,
-         cbct_triangles: Buffer, cbct_labels: Buffer, *, ios_per_face: bool = ...,
-         cbct_per_face: bool = ..., preset: str = ..., frame: str = ..., ios_repair: bool = ...,
-         max_hole_fraction: float = ..., as_numpy: Optional[bool] = ...,
-         accept_questionable: bool = ..., max_threads: int = ...,
-         progress: Optional[Callable[[str, int, int], Any]] = ...) -> FusedJaw: ...
 
 # private helpers used by _files.py and the bundled wrappers
 def _fn(name: str, restype: Any, *argtypes: Any) -> Any: ...
