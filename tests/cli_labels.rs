@@ -4,21 +4,17 @@
 //! mapped to FDI; ambiguous numbers refused unless `--labels` says; a file without a label array
 //! refused with the list of its arrays.
 
+mod cli_common;
+
+use cli_common::{tf, tmp};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 use toothfuse::io::{VtpEncoding, fdi_to_universal, write_teeth_dir, write_vtp};
 use toothfuse::phantom::{Phantom, PhantomOptions, Variant};
 use toothfuse::{Rigid, TriMesh};
 
-fn tf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_toothfuse"))
-        .args(args)
-        .output()
-        .expect("run toothfuse")
-}
-
+/// The binary run with `args`, asserted to succeed: its standard output and error together.
 fn ok(args: &[&str]) -> String {
     let o = tf(args);
     let (out, err) = (
@@ -36,13 +32,6 @@ fn fails(args: &[&str]) -> String {
     assert!(err.starts_with("toothfuse: error: "), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     err
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("toothfuse_labels_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn s(p: &Path) -> &str {

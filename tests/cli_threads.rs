@@ -3,15 +3,11 @@
 //! watched in /proc while it fuses), and its files are those of an uncapped run, byte for byte
 //! (report.json but its timings). `toothfuse --progress`: the steps on stderr, the same files.
 
+mod cli_common;
+
+use cli_common::tmp;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("toothfuse_cli_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Runs the binary with `args` to completion; returns whether it succeeded and the most
 /// threads its /proc entry showed while it ran (sampled about every 0.2 ms).

@@ -4,28 +4,14 @@
 //! the truth through report.json; and `demo --cbct-volume` whose label volumes fuse as well as
 //! its CBCT meshes.
 
+mod cli_common;
 mod real_data;
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use cli_common::{tf, tmp};
 use toothfuse::Rigid;
 use toothfuse::arch::Jaw;
 use toothfuse::phantom::Phantom;
 use toothfuse::volume::Frame;
-
-fn tf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_toothfuse"))
-        .args(args)
-        .output()
-        .expect("run toothfuse")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("toothfuse_cli_vol_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// A 4×3×2 uint16 NIfTI-1: voxel (2, 1, 1) = 36, sform diag(-0.25, -0.25, 0.5) (or no
 /// orientation at all).
