@@ -1,9 +1,12 @@
-//! Full-jaw registration (14 teeth, realistic phantom sizes): default and paper presets.
+//! Full-jaw registration (14 teeth, realistic phantom sizes): default and paper presets; and a
+//! short arch whose first jaw-wide fit lands in a wrong minimum, so that the coarse stage's
+//! restarts run (a 4-tooth lower posterior segment, rough export).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
+use toothfuse::arch::Jaw;
 use toothfuse::eval::phantom_inputs;
-use toothfuse::phantom::{Phantom, PhantomOptions};
+use toothfuse::phantom::{IosExport, Phantom, PhantomOptions, Variant};
 use toothfuse::register::{RegisterOptions, register};
 
 fn bench(c: &mut Criterion) {
@@ -25,6 +28,20 @@ fn bench(c: &mut Criterion) {
     let paper = RegisterOptions::paper();
     g.bench_function("paper_14_teeth", |b| {
         b.iter(|| register(black_box(&ios), black_box(&cbct), &paper).expect("register"))
+    });
+    // `toothfuse demo --seed 85 --jaw lower --variant partial --ios-export rough`: teeth 44-47.
+    let mut o = PhantomOptions {
+        seed: 85,
+        jaw: Jaw::Lower,
+        variant: Variant::PartialArch,
+        ..PhantomOptions::default()
+    };
+    o.realism.ios.rough = IosExport::Rough.roughness();
+    let short = Phantom::generate(&o).expect("phantom");
+    let (ios, cbct) = phantom_inputs(&short).expect("inputs");
+    eprintln!("short arch: teeth {:?}", ios.keys().collect::<Vec<_>>());
+    g.bench_function("default_short_arch_restarts", |b| {
+        b.iter(|| register(black_box(&ios), black_box(&cbct), &def).expect("register"))
     });
     g.finish();
 }
