@@ -5,6 +5,7 @@
 //! the CLI: `cli_remedies.rs`.
 
 mod cli_common;
+mod real_data;
 
 use cli_common::{ok, s, tf, tmp};
 use std::path::Path;
@@ -329,5 +330,57 @@ fn gate_refusal_names_the_way_to_fuse_anyway() {
     for t in teeth {
         assert_eq!(t["watertight"], true, "tooth {}", t["fdi"]);
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A real scan (Mesh Labeler's Example_01, upper arch, ordinal labels) on another patient's real
+/// CBCT teeth (Open-Full-Jaw patient 26: four upper teeth, Universal file numbers, which name
+/// the upper teeth as the ordinal labels do): four teeth, too few for the gate's jaw verdicts, so
+/// the full registration runs, and its crowns lie a median ~2 mm from those teeth. The jaw is
+/// refused with exit status 1 and a message naming each tooth's fit, and no file is written;
+/// with `--accept-questionable` it is fused and flagged questionable in report.json. Skipped
+/// with a message when the real data are absent.
+#[test]
+fn real_scan_on_another_patients_real_teeth_is_refused() {
+    let (Some(ios), Some(cbct)) = (
+        real_data::real("ios_mesh_labeler/Example_01.vtp"),
+        real_data::real("cbct_teeth_openfulljaw_p26/maxilla"),
+    ) else {
+        return;
+    };
+    let d = tmp("another_patient_real");
+    let out = d.join("fused");
+    let args = [
+        "fuse",
+        "--ios",
+        s(&ios),
+        "--cbct",
+        s(&cbct),
+        "--labels",
+        "meshlabeler",
+        "--out",
+        s(&out),
+    ];
+    let o = tf(&args);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("do not match (another patient?)"), "{err}");
+    assert!(err.contains("registered in full"), "{err}");
+    for f in [11, 13, 15, 16] {
+        assert!(err.contains(&format!("{f} ")), "tooth {f} named: {err}");
+    }
+    assert!(!out.join("report.json").exists());
+    let mut accept = args.to_vec();
+    accept.push("--accept-questionable");
+    ok(&accept);
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["questionable"], true, "{r}");
+    assert!(
+        r["questionable_findings"]
+            .to_string()
+            .contains("registered in full"),
+        "{r}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -36,8 +36,8 @@ use crate::{Error, Rigid};
 use glam::DVec3;
 use handedness::ios_handedness;
 use std::collections::BTreeMap;
-pub(crate) use verdict::wrong_jaw;
 use verdict::{jaw_verdict, misnumbered};
+pub(crate) use verdict::{registered_mismatch, wrong_jaw};
 
 /// Largest number of IOS points per tooth the gate's fits use (deterministic stride sample).
 const SAMPLE: usize = 150;
@@ -76,6 +76,18 @@ const TRANSLATION_REF_MM: f64 = 0.25;
 /// distributions overlap: the same-patient jaws of seed 18 (CBCT teeth 0.18-0.20 mm inside the
 /// crowns) score 2.28-2.62 and are refused, while some other-patient pairs score from 1.7.
 const MAX_MISMATCH: f64 = 2.23;
+/// Median over teeth of the surface distance (mm, [`super::ToothRegistration::sd_mm`]) after
+/// the full registration above which, with [`MIN_REGISTERED_INLIERS`], the jaw is refused as not
+/// matching. The gate's own verdicts need six teeth (a short arch's quick fit is loose about the
+/// arch line); the full registration, with its restarts, is not, so this holds on any arch. On
+/// the same patient's scans the median is at most 0.34 mm and the median inlier share at least
+/// 0.89 (98 phantom jaws of the CLI sweeps: rough, coarse and dense exports, every variant,
+/// short arches of 3-5 teeth among them); a real scan's crowns on another patient's real CBCT
+/// teeth (Mesh Labeler's Example_01 on Open-Full-Jaw patient 26, 4 teeth) 2.08 mm and 0.33.
+const MAX_REGISTERED_SD_MM: f64 = 0.6;
+/// Median inlier share (IOS crown points within the inlier distance of their CBCT tooth after
+/// the full registration) below which, with [`MAX_REGISTERED_SD_MM`], the jaw is refused.
+const MIN_REGISTERED_INLIERS: f64 = 0.6;
 /// A crown whose fit to its own CBCT tooth is worse than this (mm) and at most [`BETTER`] times
 /// that on another tooth's CBCT is misnumbered.
 const TOOTH_MISFIT_MM: f64 = 1.0;

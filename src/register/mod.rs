@@ -449,6 +449,19 @@ pub fn register(
         out.insert(*f, reg);
     }
     timing.report_ms = ms(t4);
+    let mut gate_report = gate_report;
+    // Judged only where the teeth were fitted (a centroid alignment alone, as the ablation
+    // runs it, is not expected to lay the crowns on their teeth).
+    if opts.coarse.is_some()
+        && let Some(e) = gate::registered_mismatch(&out)
+    {
+        if !opts.accept_questionable {
+            return Err(e);
+        }
+        gate_report
+            .accepted
+            .push(format!("{e} (accepted as questionable)"));
+    }
     step(Stage::Register)?;
     timing.total_ms = ms(t0);
     Ok(Registration {

@@ -386,3 +386,55 @@ fn coarse_restarts_escape_a_wrong_minimum_about_the_arch_line() {
         max_tre(&fx, &r)
     );
 }
+
+/// Another patient's teeth under a short arch (4 teeth: too few for the gate's jaw verdicts):
+/// each CBCT tooth stretched 35 % across one axis and squeezed 25 % across another about its
+/// centroid. Registered in full, the crowns do not lie on them, and the jaw is refused naming
+/// the fit per tooth; accepted as questionable it registers with that finding. The same arch
+/// with the patient's own teeth is not refused.
+#[test]
+fn short_arch_on_another_patients_teeth_is_refused_after_the_full_registration() {
+    let fx = fixture(0.0, 0.0);
+    let arch = [13u8, 14, 15, 16];
+    let ios: BTreeMap<u8, TriMesh> = arch.iter().map(|f| (*f, fx.ios[f].clone())).collect();
+    let own: BTreeMap<u8, TriMesh> = arch.iter().map(|f| (*f, fx.cbct[f].clone())).collect();
+    let others: BTreeMap<u8, TriMesh> = own
+        .iter()
+        .map(|(f, m)| {
+            let c = crate::geom::centroid(&m.positions).unwrap();
+            let positions = m
+                .positions
+                .iter()
+                .map(|p| {
+                    let d = *p - c;
+                    c + DVec3::new(1.35 * d.x, 0.75 * d.y, d.z)
+                })
+                .collect();
+            (*f, TriMesh::new(positions, m.triangles.clone()))
+        })
+        .collect();
+    let o = RegisterOptions::default();
+    let r = super::register(&ios, &own, &o).expect("the patient's own teeth");
+    assert!(!r.questionable(), "{:?}", r.gate.accepted);
+    let e = super::register(&ios, &others, &o).expect_err("another patient's teeth");
+    let msg = e.to_string();
+    assert!(matches!(e, Error::RegistrationRejected(_)), "{msg}");
+    assert!(msg.contains("registered in full"), "{msg}");
+    for f in arch {
+        assert!(msg.contains(&format!("{f} ")), "tooth {f} named: {msg}");
+    }
+    let accepted = RegisterOptions {
+        accept_questionable: true,
+        ..o
+    };
+    let r = super::register(&ios, &others, &accepted).expect("accepted as questionable");
+    assert!(r.questionable());
+    assert!(
+        r.gate
+            .accepted
+            .iter()
+            .any(|a| a.contains("registered in full")),
+        "{:?}",
+        r.gate.accepted
+    );
+}

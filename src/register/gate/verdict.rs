@@ -3,10 +3,12 @@
 
 use super::{
     BETTER, CLEAR_FIT_MM, GOOD_FIT_MM, GateReport, MAX_JAW_FIT_MM, MAX_MISMATCH,
-    MIN_TEETH_FOR_MISMATCH, MIRROR_BETTER, TOOTH_MISFIT_MM,
+    MAX_REGISTERED_SD_MM, MIN_REGISTERED_INLIERS, MIN_TEETH_FOR_MISMATCH, MIRROR_BETTER,
+    TOOTH_MISFIT_MM,
 };
 use crate::Error;
 use crate::arch::jaw_of;
+use crate::register::ToothRegistration;
 use std::collections::BTreeMap;
 
 /// The jaw-level verdict from the gate's measures: mirrored, labels shifted, or another
@@ -128,4 +130,37 @@ pub(crate) fn wrong_jaw(ios: &[u8], cbct: &[u8]) -> Option<Error> {
         )));
     }
     None
+}
+
+/// The error for a jaw whose teeth, registered in full, still do not lie on their CBCT teeth:
+/// the median surface distance over the teeth above [`MAX_REGISTERED_SD_MM`] and the median
+/// share of crown points within the inlier distance below [`MIN_REGISTERED_INLIERS`] (another
+/// patient's teeth, or a registration that found no fit). Teeth of the same patient fit far
+/// better whatever their export or CBCT errors; one tooth with a metal streak does not move the
+/// medians.
+pub(crate) fn registered_mismatch(teeth: &BTreeMap<u8, ToothRegistration>) -> Option<Error> {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let sd = median(teeth.values().map(|t| t.sd_mm).collect())?;
+    let inliers = median(teeth.values().map(|t| t.inlier_fraction).collect())?;
+    if sd <= MAX_REGISTERED_SD_MM || inliers >= MIN_REGISTERED_INLIERS {
+        return None;
+    }
+    let per_tooth: Vec<String> = teeth
+        .values()
+        .map(|t| format!("{} {:.2} mm", t.fdi, t.sd_mm))
+        .collect();
+    Some(Error::RegistrationRejected(format!(
+        "the IOS and the CBCT do not match (another patient?): registered in full, the IOS \
+         crowns lie a median {sd:.2} mm from their CBCT teeth (per tooth: {}) and a median \
+         {:.0} % of their points within the inlier distance (refused beyond {MAX_REGISTERED_SD_MM} \
+         mm with under {:.0} %; the same patient's scans measure at most 0.34 mm and 89 % on the \
+         phantom); check that both scans are of this patient and the tooth numbers of both; \
+         accept questionable data to fuse anyway",
+        per_tooth.join(", "),
+        100.0 * inliers,
+        100.0 * MIN_REGISTERED_INLIERS
+    )))
 }
