@@ -62,6 +62,19 @@ pub(super) fn jaw_verdict(r: &GateReport, shift_step: i32) -> Option<Error> {
         )));
     }
     if long_arch && (r.fit_mm > MAX_JAW_FIT_MM || r.mismatch > MAX_MISMATCH) {
+        // With no crown within reach of its own CBCT tooth no tooth is fitted alone: the score
+        // has no finite value, and the surface offset and the hint about biased segmentations
+        // mean nothing. Said so rather than printed as "inf".
+        if !r.mismatch.is_finite() {
+            return Some(Error::RegistrationRejected(format!(
+                "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the \
+                 IOS crowns lie a median {:.2} mm from their CBCT teeth and none lies within \
+                 {TOOTH_MISFIT_MM} mm of its own (the same patient's crowns: a median 0.1-0.3 \
+                 mm); check that both scans are of this patient and the tooth numbers of both; \
+                 accept questionable data to fuse anyway",
+                r.fit_mm
+            )));
+        }
         return Some(Error::RegistrationRejected(format!(
             "the IOS and the CBCT do not match (another patient?): after the jaw-wide fit the IOS \
              crowns lie a median {:.2} mm from their CBCT teeth (the CBCT tooth surfaces {:+.2} mm \
@@ -163,4 +176,45 @@ pub(crate) fn registered_mismatch(teeth: &BTreeMap<u8, ToothRegistration>) -> Op
         100.0 * inliers,
         100.0 * MIN_REGISTERED_INLIERS
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::ToothEvidence;
+    use super::*;
+    use glam::DVec3;
+
+    /// A full arch whose crowns lie nowhere near their CBCT teeth (a real scan on another
+    /// patient's segmentation measured a median 15.6 mm): no tooth is fitted alone, so the score
+    /// is infinite; the refusal says why in words, with no "inf" and no surface offset.
+    #[test]
+    fn no_crown_near_its_tooth_is_refused_in_words() {
+        let tooth = |fdi| ToothEvidence {
+            fdi,
+            own_fit_mm: 15.0,
+            best_other: None,
+            own_shift_mm: f64::INFINITY,
+            own_lateral_mm: f64::INFINITY,
+            own_refit_mm: f64::INFINITY,
+            own_motion: [DVec3::ZERO; 3],
+        };
+        let r = GateReport {
+            fit_mm: 15.58,
+            surface_offset_mm: -15.1,
+            mirrored_fit_mm: 16.0,
+            shifted_fit_mm: 16.0,
+            tooth_translation_mm: f64::INFINITY,
+            mismatch: f64::INFINITY,
+            teeth: [11, 12, 13, 21, 22, 23].into_iter().map(tooth).collect(),
+            ..GateReport::default()
+        };
+        let e = jaw_verdict(&r, 1).expect("refused");
+        let m = e.to_string();
+        assert!(matches!(e, Error::RegistrationRejected(_)), "{m}");
+        assert!(
+            m.contains("15.58 mm") && m.contains("none lies within 1 mm"),
+            "{m}"
+        );
+        assert!(!m.contains("inf") && !m.contains("-15.10"), "{m}");
+    }
 }
