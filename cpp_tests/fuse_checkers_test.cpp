@@ -46,21 +46,7 @@ Fused fused(tf::Session& s, int32_t fdi) {
   return f;
 }
 
-vtkSmartPointer<vtkPolyData> polydata(const std::vector<double>& xyz,
-                                      const std::vector<uint32_t>& tris) {
-  vtkNew<vtkPoints> pts;
-  pts->SetDataTypeToDouble();
-  for (size_t i = 0; i < xyz.size() / 3; i++) pts->InsertNextPoint(&xyz[3 * i]);
-  vtkNew<vtkCellArray> polys;
-  for (size_t t = 0; t < tris.size() / 3; t++) {
-    vtkIdType ids[3] = {tris[3 * t], tris[3 * t + 1], tris[3 * t + 2]};
-    polys->InsertNextCell(3, ids);
-  }
-  auto pd = vtkSmartPointer<vtkPolyData>::New();
-  pd->SetPoints(pts);
-  pd->SetPolys(polys);
-  return pd;
-}
+using tf::polydata;
 
 // vtkFeatureEdges: the number of boundary (or non-manifold) edges of a surface.
 vtkIdType feature_edges(vtkPolyData* pd, bool boundary) {

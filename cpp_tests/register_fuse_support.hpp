@@ -1,6 +1,6 @@
 // Helpers of the registration and fusion tests: reading a demo jaw (ios.ply, cbct.ply with a
 // per-vertex int `label`) with OpenMesh, the ground truth's matrices from truth/truth.json by
-// string search, and feeding a jaw into a session.
+// string search, feeding a jaw into a session, and a mesh as VTK polydata.
 #pragma once
 
 #include "test_support.hpp"
@@ -8,7 +8,12 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include <vtkCellArray.h>
+#include <vtkNew.h>
 #include <vtkPLY.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 
 #include <array>
 #include <cstddef>
@@ -173,6 +178,26 @@ inline std::array<double, 3> apply(const Mat4& m, const double* p) {
   for (int r = 0; r < 3; r++)
     o[r] = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
   return o;
+}
+
+/// A triangle mesh as VTK polydata: double points `xyz` (x, y, z per point), triangles `tris`
+/// (three point indices each).
+inline vtkSmartPointer<vtkPolyData> polydata(const std::vector<double>& xyz,
+                                             const std::vector<uint32_t>& tris) {
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  pts->SetNumberOfPoints(static_cast<vtkIdType>(xyz.size() / 3));
+  for (size_t i = 0; i < xyz.size() / 3; i++)
+    pts->SetPoint(static_cast<vtkIdType>(i), &xyz[3 * i]);
+  vtkNew<vtkCellArray> polys;
+  for (size_t t = 0; t < tris.size() / 3; t++) {
+    vtkIdType ids[3] = {tris[3 * t], tris[3 * t + 1], tris[3 * t + 2]};
+    polys->InsertNextCell(3, ids);
+  }
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
+  pd->SetPoints(pts);
+  pd->SetPolys(polys);
+  return pd;
 }
 
 }  // namespace tf
