@@ -139,9 +139,11 @@ enum toothfuse_status
    */
   TOOTHFUSE_STATUS_MIRRORED = 14,
   /**
-   * The registration gate refused the data: the IOS and the CBCT do not belong together
-   * (another patient, the other jaw, tooth numbers shifted along the arch); the message names
-   * the likely cause. Set `accept_questionable` in the options to register anyway.
+   * The data were refused: the IOS and the CBCT do not belong together (another patient, the
+   * other jaw, tooth numbers shifted along the arch), found by the registration gate before
+   * registering or, on an arch of any length, by the crowns still lying off their CBCT teeth
+   * after the full registration; the message names the likely cause. Set
+   * `accept_questionable` in the options to register anyway.
    */
   TOOTHFUSE_STATUS_REGISTRATION_REJECTED = 15,
   /**
@@ -235,8 +237,9 @@ typedef struct toothfuse_options {
    */
   toothfuse_frame frame;
   /**
-   * 0 (default): data the registration gate finds questionable (mirrored, another patient,
-   * shifted or misnumbered labels) are refused (TOOTHFUSE_STATUS_MIRRORED,
+   * 0 (default): data the registration finds questionable (mirrored, another patient, shifted
+   * or misnumbered labels: found by its gate before registering, or by crowns still off their
+   * CBCT teeth after it) are refused (TOOTHFUSE_STATUS_MIRRORED,
    * TOOTHFUSE_STATUS_REGISTRATION_REJECTED) or their teeth skipped; 1: registered anyway, the
    * findings then listed under `"questionable"` in the report JSON and as tooth warnings.
    * Appended after `frame`: a caller whose `struct_size` ends before it gets 0.

@@ -51,8 +51,9 @@ pub struct toothfuse_options {
     pub preset: toothfuse_preset,
     /// TOOTHFUSE_FRAME_CBCT (default) or TOOTHFUSE_FRAME_IOS.
     pub frame: toothfuse_frame,
-    /// 0 (default): data the registration gate finds questionable (mirrored, another patient,
-    /// shifted or misnumbered labels) are refused (TOOTHFUSE_STATUS_MIRRORED,
+    /// 0 (default): data the registration finds questionable (mirrored, another patient, shifted
+    /// or misnumbered labels: found by its gate before registering, or by crowns still off their
+    /// CBCT teeth after it) are refused (TOOTHFUSE_STATUS_MIRRORED,
     /// TOOTHFUSE_STATUS_REGISTRATION_REJECTED) or their teeth skipped; 1: registered anyway, the
     /// findings then listed under `"questionable"` in the report JSON and as tooth warnings.
     /// Appended after `frame`: a caller whose `struct_size` ends before it gets 0.

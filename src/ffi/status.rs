@@ -45,9 +45,11 @@ pub enum toothfuse_status {
     /// One modality is a mirror image of the other (x -> -x, or an LPS/RAS conversion applied to
     /// one modality only); the message names the evidence. Nothing was registered.
     Mirrored = 14,
-    /// The registration gate refused the data: the IOS and the CBCT do not belong together
-    /// (another patient, the other jaw, tooth numbers shifted along the arch); the message names
-    /// the likely cause. Set `accept_questionable` in the options to register anyway.
+    /// The data were refused: the IOS and the CBCT do not belong together (another patient, the
+    /// other jaw, tooth numbers shifted along the arch), found by the registration gate before
+    /// registering or, on an arch of any length, by the crowns still lying off their CBCT teeth
+    /// after the full registration; the message names the likely cause. Set
+    /// `accept_questionable` in the options to register anyway.
     RegistrationRejected = 15,
     /// The session's progress callback (`toothfuse_session_set_progress`) asked the call to
     /// stop; the session keeps what it held before the call.
