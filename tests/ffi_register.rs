@@ -315,3 +315,44 @@ fn transform_getter_rejects_bad_arguments() {
     );
     assert_eq!(m, [0.0; 16]);
 }
+
+/// Another patient's teeth under the phantom's short arch (3–5 teeth, too few for the gate's
+/// jaw verdicts): every CBCT tooth stretched 50 % across one axis and squeezed 35 % across
+/// another about its centroid (stretched 35 % and squeezed 25 %, the crowns still fitted them a
+/// median 0.51 mm with 58 % within 0.5 mm: outside the same patient's range, 0.34 mm and 89 %,
+/// but inside the refusal's, which is set wide so as not to refuse the same patient). `toothfuse_session_register` returns REGISTRATION_REJECTED, the
+/// session's last error says the crowns lie off their teeth after the full registration, and the
+/// session keeps its input teeth; with `accept_questionable` it registers them, and the report
+/// JSON says questionable.
+#[test]
+fn another_patients_teeth_under_a_short_arch_are_rejected_after_registering() {
+    let mut p = phantom(3);
+    for m in p.cbct.values_mut() {
+        let c = m.positions.iter().copied().sum::<glam::DVec3>() / m.positions.len() as f64;
+        for q in &mut m.positions {
+            let d = *q - c;
+            *q = c + glam::DVec3::new(1.5 * d.x, 0.65 * d.y, d.z);
+        }
+    }
+    let s = Session::new();
+    add_phantom(&s, &p);
+    // SAFETY: live session, NULL options = defaults.
+    let st = unsafe { toothfuse_session_register(s.0, ptr::null()) };
+    assert_eq!(st, toothfuse_status::RegistrationRejected, "{}", s.error());
+    assert!(s.error().contains("registered in full"), "{}", s.error());
+    let mut n = 0usize;
+    // SAFETY: live session, valid out pointer.
+    let st = unsafe { toothfuse_session_tooth_count(s.0, TOOTHFUSE_MODALITY_CBCT, &mut n) };
+    assert_eq!(st, toothfuse_status::Ok);
+    assert_eq!(n, p.cbct.len(), "the session keeps its CBCT teeth");
+    let opts = toothfuse_options {
+        accept_questionable: 1,
+        ..toothfuse_options::default()
+    };
+    // SAFETY: live session, valid options.
+    let st = unsafe { toothfuse_session_register(s.0, &opts) };
+    assert_eq!(st, toothfuse_status::Ok, "{}", s.error());
+    assert!(registered(&s).len() >= 3);
+    let json = ffi_common::report_json(&s);
+    assert!(json.contains("registered in full"), "{json}");
+}
