@@ -105,6 +105,14 @@ pub enum Error {
     /// The caller's progress callback ([`crate::progress::with_progress`]) asked the call to
     /// stop; the message names the stage.
     Cancelled(String),
+    /// An error with what the caller can do about it (e.g. an IOS crown refused as given, with
+    /// how to have crowns repaired on entry); of the kind of `inner`.
+    WithRemedy {
+        /// What went wrong.
+        inner: Box<Error>,
+        /// What the caller can do, as a clause that follows the error's own text.
+        remedy: String,
+    },
     /// An error that concerns one tooth, by FDI number.
     Tooth {
         /// FDI number of the tooth.
@@ -134,7 +142,7 @@ impl Error {
             Error::Mirrored(_) => ErrorKind::Mirrored,
             Error::RegistrationRejected(_) => ErrorKind::RegistrationRejected,
             Error::Cancelled(_) => ErrorKind::Cancelled,
-            Error::Tooth { inner, .. } => inner.kind(),
+            Error::WithRemedy { inner, .. } | Error::Tooth { inner, .. } => inner.kind(),
         }
     }
 
@@ -200,6 +208,7 @@ impl fmt::Display for Error {
             Error::Mirrored(m) => write!(f, "mirrored: {m}"),
             Error::RegistrationRejected(m) => write!(f, "registration rejected: {m}"),
             Error::Cancelled(m) => write!(f, "cancelled: {m}"),
+            Error::WithRemedy { inner, remedy } => write!(f, "{inner}; {remedy}"),
             Error::Tooth { fdi, inner } => write!(f, "tooth {fdi}: {inner}"),
         }
     }

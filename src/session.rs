@@ -88,6 +88,13 @@ pub struct Tooth {
 /// `source_vertex` entry of a vertex that repair added (a hole centre).
 pub const NO_SOURCE: u32 = u32::MAX;
 
+/// What an IOS crown refused as given (not a manifold open surface) can be made to pass: the
+/// IOS repair on entry, as the command line always runs it.
+const IOS_REPAIR_REMEDY: &str = "IOS crowns are taken as given: scan exports often carry such \
+     faults; turn the IOS repair on (toothfuse_session_set_ios_repair; Python: ios_repair=True; \
+     the command line always repairs) to make each crown one manifold disk on entry, every kept \
+     vertex at its given position";
+
 /// The teeth handed over so far, per modality, keyed by FDI number.
 #[derive(Clone, Debug, Default)]
 pub struct Session {
@@ -154,7 +161,20 @@ impl Session {
             }
             _ => (mesh, source, None),
         };
-        let report = Self::validate_tooth(modality, fdi, &mesh)?;
+        let report = Self::validate_tooth(modality, fdi, &mesh).map_err(|e| {
+            // A scan export's crown often carries such faults: say how to have it repaired.
+            if modality == Modality::Ios
+                && self.ios_repair.is_none()
+                && e.kind() == crate::ErrorKind::NotManifold
+            {
+                Error::WithRemedy {
+                    inner: Box::new(e),
+                    remedy: IOS_REPAIR_REMEDY.to_string(),
+                }
+            } else {
+                e
+            }
+        })?;
         crate::units::check_entry_scale(&mesh, &modality.to_string())
             .map_err(|e| e.in_tooth(fdi))?;
         Ok(Tooth {
@@ -399,10 +419,20 @@ mod tests {
         );
         let mut s = Session::new();
         let e = s.add_tooth(Modality::Ios, 11, bow.clone()).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "tooth 11: vertex 0 is non-manifold: it joins separate fans of faces"
+        // Refused as given, with how to have it repaired; still a manifold error.
+        let m = e.to_string();
+        assert!(
+            m.starts_with("tooth 11: vertex 0 is non-manifold: it joins separate fans of faces; "),
+            "{m}"
         );
+        assert!(
+            m.contains("turn the IOS repair on") && m.contains("ios_repair=True"),
+            "{m}"
+        );
+        assert_eq!(e.kind(), crate::ErrorKind::NotManifold);
+        // A CBCT tooth is never repaired: no such remedy.
+        let e = s.add_tooth(Modality::Cbct, 11, bow.clone()).unwrap_err();
+        assert!(!e.to_string().contains("IOS repair"), "{e}");
         s.set_ios_repair(Some(RepairOptions::default())).unwrap();
         s.add_tooth(Modality::Ios, 11, bow.clone()).unwrap();
         let t = s.tooth(Modality::Ios, 11).unwrap();

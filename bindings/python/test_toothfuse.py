@@ -123,6 +123,8 @@ class BindingsTest(unittest.TestCase):
             with self.assertRaises(toothfuse.ToothfuseError) as e:
                 s.add_tooth(toothfuse.IOS, 31, v, t)
             self.assertIn("vertex 0 is non-manifold", str(e.exception))
+            # The refusal says how to have the crown repaired on entry.
+            self.assertIn("ios_repair=True", str(e.exception))
             s.set_ios_repair(True)
             s.add_tooth(toothfuse.IOS, 31, v, t)
             self.assertTrue(s.info(toothfuse.IOS, 31)["manifold"])
