@@ -171,8 +171,8 @@ fn median_fit(teeth: &BTreeMap<u8, ToothData>, t: &Rigid) -> f64 {
 /// principal axis of the IOS tooth centroids by multiples of 30° and eq. (2) rerun from each; the
 /// best fit wins. A good first fit is returned unchanged. The restarts are probed side by side
 /// with at most [`PROBE_ITERATIONS`] of the stage's first pass (the warm-up sample's, by
-/// default), compared in their order, and only the best runs the rest of the stage (each ran
-/// every pass before: the 33 restarts of a 4-tooth arch held its registration 10–50× as long
+/// default), compared in their order, and only the best runs the rest of the stage (run
+/// through every pass, the 33 restarts of a 4-tooth arch hold its registration 10–50× as long
 /// as a full jaw's).
 pub(crate) fn coarse_with_restarts(
     teeth: &BTreeMap<u8, ToothData>,
@@ -237,8 +237,8 @@ mod tests {
     use super::super::{RegisterOptions, prepare};
     use super::*;
 
-    /// The restarts as they ran before they were probed: each through every pass, the best fit
-    /// kept.
+    /// Every restart run through every pass, the best fit kept: the reference the probed
+    /// restarts are checked against.
     fn every_restart_run_through(
         teeth: &BTreeMap<u8, ToothData>,
         init: Rigid,
