@@ -150,6 +150,11 @@ impl Error {
     pub fn in_tooth(self, fdi: u8) -> Error {
         match self {
             e @ Error::Tooth { .. } => e,
+            // The remedy stays last: "tooth 11: <error>; <remedy>".
+            Error::WithRemedy { inner, remedy } => Error::WithRemedy {
+                inner: Box::new(inner.in_tooth(fdi)),
+                remedy,
+            },
             e => Error::Tooth {
                 fdi,
                 inner: Box::new(e),

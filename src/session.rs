@@ -430,6 +430,8 @@ mod tests {
             "{m}"
         );
         assert_eq!(e.kind(), crate::ErrorKind::NotManifold);
+        // Naming the tooth again changes nothing: the tooth first, the remedy last.
+        assert_eq!(e.clone().in_tooth(11), e);
         // A CBCT tooth is never repaired: no such remedy.
         let e = s.add_tooth(Modality::Cbct, 11, bow.clone()).unwrap_err();
         assert!(!e.to_string().contains("IOS repair"), "{e}");

@@ -400,7 +400,7 @@ pub fn register(
     timing.prepare_ms = ms(t0);
     step(Stage::Register)?;
     let tg = Instant::now();
-    let (gate_report, gate_warnings) = run_gate(&mut teeth, &mut skipped, opts)?;
+    let (mut gate_report, gate_warnings) = run_gate(&mut teeth, &mut skipped, opts)?;
     timing.gate_ms = ms(tg);
     step(Stage::Register)?;
     let order = crate::arch::arch_order(&teeth.keys().copied().collect::<Vec<_>>());
@@ -449,7 +449,6 @@ pub fn register(
         out.insert(*f, reg);
     }
     timing.report_ms = ms(t4);
-    let mut gate_report = gate_report;
     // Judged only where the teeth were fitted (a centroid alignment alone, as the ablation
     // runs it, is not expected to lay the crowns on their teeth).
     if opts.coarse.is_some()

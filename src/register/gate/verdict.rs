@@ -4,7 +4,7 @@
 use super::{
     BETTER, CLEAR_FIT_MM, GOOD_FIT_MM, GateReport, MAX_JAW_FIT_MM, MAX_MISMATCH,
     MAX_REGISTERED_SD_MM, MIN_REGISTERED_INLIERS, MIN_TEETH_FOR_MISMATCH, MIRROR_BETTER,
-    TOOTH_MISFIT_MM,
+    TOOTH_MISFIT_MM, median,
 };
 use crate::Error;
 use crate::arch::jaw_of;
@@ -152,12 +152,9 @@ pub(crate) fn wrong_jaw(ios: &[u8], cbct: &[u8]) -> Option<Error> {
 /// better whatever their export or CBCT errors; one tooth with a metal streak does not move the
 /// medians.
 pub(crate) fn registered_mismatch(teeth: &BTreeMap<u8, ToothRegistration>) -> Option<Error> {
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied()
-    };
-    let sd = median(teeth.values().map(|t| t.sd_mm).collect())?;
-    let inliers = median(teeth.values().map(|t| t.inlier_fraction).collect())?;
+    // The gate's upper median: infinite for no tooth, which is then not refused.
+    let sd = median(teeth.values().map(|t| t.sd_mm).collect());
+    let inliers = median(teeth.values().map(|t| t.inlier_fraction).collect());
     if sd <= MAX_REGISTERED_SD_MM || inliers >= MIN_REGISTERED_INLIERS {
         return None;
     }
